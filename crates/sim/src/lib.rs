@@ -1,0 +1,1 @@
+//! Simulated temperature-chamber runs (filled by the simulator issue).

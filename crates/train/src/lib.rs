@@ -1,0 +1,1 @@
+//! Host-side training of compensation models (filled by the trainer issue).

@@ -1,0 +1,28 @@
+//! `tcomp`: the command-line tool around the compensation core.
+//!
+//! Each subcommand lives in its own module under `cmd/`; `main` only parses arguments and dispatches.
+
+mod cmd;
+
+use clap::{Parser, Subcommand};
+
+/// Temperature compensation of inertial sensors (RLG, QMA, IFOG, MEMS).
+#[derive(Parser)]
+#[command(name = "tcomp", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print the contents of a model blob; a corrupt blob is named as such, with the reason.
+    Inspect(cmd::inspect::Args),
+}
+
+fn main() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Inspect(args) => cmd::inspect::run(&args),
+    }
+}
