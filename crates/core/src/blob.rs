@@ -1,0 +1,317 @@
+//! The model blob: what the host trainer writes and the firmware flies, as one serde type.
+//!
+//! Wire format (postcard is not self-describing, so the layout is fixed by this type and its version):
+//! ```text
+//! postcard(Model { magic: b"TCMB", version: u16, meta, program, ranges, rbf, residual }) ++ CRC-32 (LE)
+//! ```
+//! The magic is four raw bytes and the version a varint, so both are read before anything else and a
+//! blob of another version is refused by number, not misread. The CRC-32 (ISO-HDLC, as zip/PNG) covers
+//! every byte before it: any single corrupted byte, and any burst up to 32 bits, is detected.
+//! Strings borrow from the blob (zero-copy), so a model decoded from flash costs RAM only for its
+//! numbers. Decoding checks, in order: length, magic, version, checksum, structure, capacities, values
+//! (finite, positive widths, topologically ordered program) — and returns the first failure as a
+//! [`BlobError`]; it never panics on any byte string.
+
+use crate::point::Point;
+use crate::program::{Program, ProgramError};
+use crate::rbf::{Rbf, RbfError};
+use crate::{HOST_CENTERS, HOST_FEATURES, HOST_NODES};
+use heapless::Vec;
+use serde::{Deserialize, Serialize};
+
+/// The four bytes every blob starts with.
+pub const MAGIC: [u8; 4] = *b"TCMB";
+/// The blob format version this build reads and writes.
+pub const FORMAT_VERSION: u16 = 1;
+const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// The instrument a model compensates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SensorKind {
+    /// Ring laser gyro.
+    Rlg,
+    /// Quartz (pendulous) accelerometer.
+    Qma,
+    /// Interferometric fiber-optic gyro.
+    Ifog,
+    /// MEMS gyro.
+    MemsGyro,
+    /// MEMS accelerometer.
+    MemsAccel,
+    /// Anything else.
+    Other,
+}
+
+/// Which CSV columns played which role in training.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ColumnRoles<'a> {
+    /// Time column (seconds).
+    pub time: &'a str,
+    /// Sensor output column.
+    pub target: &'a str,
+    /// Reference column, or "" when a constant reference was used.
+    pub reference: &'a str,
+    /// The constant reference, when there was no reference column.
+    pub reference_value: Option<f32>,
+}
+
+/// Descriptive metadata; nothing in it changes the numbers the model produces.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Meta<'a> {
+    /// Instrument kind.
+    pub sensor: SensorKind,
+    /// Axis label, e.g. "x".
+    #[serde(borrow)]
+    pub axis: &'a str,
+    /// Unit of the target and of the correction, e.g. "deg/h".
+    pub unit: &'a str,
+    /// Training method, e.g. "bayes".
+    pub method: &'a str,
+    /// Column roles.
+    #[serde(borrow)]
+    pub columns: ColumnRoles<'a>,
+    /// What data it was trained on (file names, time span).
+    pub trained_on: &'a str,
+    /// Number of training samples (after averaging).
+    pub train_samples: u32,
+}
+
+/// The range of one feature seen in training; inputs outside are clamped and flagged.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FeatureRange {
+    /// Lowest valid value.
+    pub lo: f32,
+    /// Highest valid value.
+    pub hi: f32,
+}
+
+/// The residual seen on held-out data when the model was made.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ResidualLevel {
+    /// Residual std at the data's step, target units.
+    pub std: f32,
+    /// Residual std of bin means.
+    pub binned_std: f32,
+    /// Bin length in seconds for `binned_std`.
+    pub bin_s: f32,
+}
+
+/// A compensation model: capacities `C` centers, `F` features, `N` program nodes.
+/// The host uses the defaults; firmware picks what its channels need.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Model<
+    'a,
+    const C: usize = HOST_CENTERS,
+    const F: usize = HOST_FEATURES,
+    const N: usize = HOST_NODES,
+> {
+    /// Always [`MAGIC`].
+    pub magic: [u8; 4],
+    /// Always [`FORMAT_VERSION`] for a model of this build.
+    pub version: u16,
+    /// Metadata.
+    #[serde(borrow)]
+    pub meta: Meta<'a>,
+    /// The feature program.
+    #[serde(borrow)]
+    pub program: Program<'a, N, F>,
+    /// Valid range of each feature.
+    pub ranges: Vec<FeatureRange, F>,
+    /// RBF coefficients.
+    pub rbf: Rbf<C, F>,
+    /// Held-out residual level.
+    pub residual: ResidualLevel,
+}
+
+/// Why a blob was rejected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum BlobError {
+    /// Shorter than the smallest possible blob, or the structure ends early.
+    Truncated,
+    /// The first four bytes are not `TCMB`.
+    BadMagic,
+    /// A format version this build does not read.
+    UnsupportedVersion(u16),
+    /// The CRC-32 does not match the content.
+    Checksum,
+    /// A list or string is longer than this build's capacity.
+    CapacityExceeded,
+    /// The bytes do not form a model (bad enum tag, bad UTF-8, bytes left over).
+    Malformed,
+    /// A number is NaN or infinite; names the field.
+    NonFinite(&'static str),
+    /// Sizes or values disagree; names the field.
+    Inconsistent(&'static str),
+    /// The feature program is invalid.
+    Program(ProgramError),
+    /// The output buffer is too small to encode into.
+    BufferTooSmall,
+}
+
+impl core::fmt::Display for BlobError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Truncated => write!(f, "truncated blob"),
+            Self::BadMagic => write!(f, "not a tcomp model blob (bad magic)"),
+            Self::UnsupportedVersion(v) => {
+                write!(
+                    f,
+                    "unsupported blob format version {v} (this build reads {FORMAT_VERSION})"
+                )
+            }
+            Self::Checksum => write!(f, "checksum mismatch: the blob is corrupt"),
+            Self::CapacityExceeded => write!(f, "a size in the blob exceeds this build's capacity"),
+            Self::Malformed => write!(f, "malformed blob content"),
+            Self::NonFinite(field) => write!(f, "non-finite number in {field}"),
+            Self::Inconsistent(field) => write!(f, "inconsistent field {field}"),
+            Self::Program(e) => write!(f, "invalid feature program: {e}"),
+            Self::BufferTooSmall => write!(f, "output buffer too small"),
+        }
+    }
+}
+
+impl From<RbfError> for BlobError {
+    fn from(e: RbfError) -> Self {
+        match e {
+            RbfError::NonFinite(f) => Self::NonFinite(f),
+            RbfError::Inconsistent(f) => Self::Inconsistent(f),
+        }
+    }
+}
+
+fn map_postcard(e: postcard::Error) -> BlobError {
+    match e {
+        postcard::Error::DeserializeUnexpectedEnd => BlobError::Truncated,
+        // heapless reports a sequence or string longer than its capacity through serde's custom error.
+        postcard::Error::SerdeDeCustom => BlobError::CapacityExceeded,
+        postcard::Error::SerializeBufferFull => BlobError::BufferTooSmall,
+        _ => BlobError::Malformed,
+    }
+}
+
+impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
+    /// A model from its parts, with magic and version set.
+    pub fn new(
+        meta: Meta<'a>,
+        program: Program<'a, N, F>,
+        ranges: Vec<FeatureRange, F>,
+        rbf: Rbf<C, F>,
+        residual: ResidualLevel,
+    ) -> Self {
+        Self {
+            magic: MAGIC,
+            version: FORMAT_VERSION,
+            meta,
+            program,
+            ranges,
+            rbf,
+            residual,
+        }
+    }
+
+    /// Number of features.
+    pub fn n_features(&self) -> usize {
+        self.program.n_features()
+    }
+
+    /// Checks everything a model must satisfy before it may fly.
+    pub fn validate(&self) -> Result<(), BlobError> {
+        if self.magic != MAGIC {
+            return Err(BlobError::BadMagic);
+        }
+        if self.version != FORMAT_VERSION {
+            return Err(BlobError::UnsupportedVersion(self.version));
+        }
+        self.program.validate().map_err(BlobError::Program)?;
+        self.rbf.validate()?;
+        let nf = self.program.n_features();
+        if self.rbf.n_features as usize != nf {
+            return Err(BlobError::Inconsistent(
+                "rbf.n_features differs from program.features",
+            ));
+        }
+        if self.ranges.len() != nf {
+            return Err(BlobError::Inconsistent("ranges: one per feature"));
+        }
+        for r in &self.ranges {
+            if !(r.lo.is_finite() && r.hi.is_finite()) {
+                return Err(BlobError::NonFinite("ranges"));
+            }
+            if r.lo > r.hi {
+                return Err(BlobError::Inconsistent("ranges: lo > hi"));
+            }
+        }
+        if self
+            .meta
+            .columns
+            .reference_value
+            .is_some_and(|v| !v.is_finite())
+        {
+            return Err(BlobError::NonFinite("meta.columns.reference_value"));
+        }
+        let res = &self.residual;
+        if !(res.std.is_finite() && res.binned_std.is_finite() && res.bin_s.is_finite()) {
+            return Err(BlobError::NonFinite("residual"));
+        }
+        Ok(())
+    }
+
+    /// Writes the blob into `buf`, returning its length. Refuses a model that would not decode.
+    pub fn encode(&self, buf: &mut [u8]) -> Result<usize, BlobError> {
+        self.validate()?;
+        let used = postcard::to_slice(self, buf).map_err(map_postcard)?.len();
+        let crc = CRC.checksum(buf.get(..used).ok_or(BlobError::BufferTooSmall)?);
+        let tail = buf
+            .get_mut(used..used + 4)
+            .ok_or(BlobError::BufferTooSmall)?;
+        tail.copy_from_slice(&crc.to_le_bytes());
+        Ok(used + 4)
+    }
+
+    /// Decodes and validates a blob. Never panics, whatever the bytes.
+    pub fn decode(bytes: &'a [u8]) -> Result<Self, BlobError> {
+        let magic = bytes.get(..4).ok_or(BlobError::Truncated)?;
+        if magic != MAGIC {
+            return Err(BlobError::BadMagic);
+        }
+        let after_magic = bytes.get(4..).ok_or(BlobError::Truncated)?;
+        let (version, _) = postcard::take_from_bytes::<u16>(after_magic).map_err(|e| match e {
+            postcard::Error::DeserializeUnexpectedEnd => BlobError::Truncated,
+            _ => BlobError::Malformed,
+        })?;
+        if version != FORMAT_VERSION {
+            return Err(BlobError::UnsupportedVersion(version));
+        }
+        let body_len = bytes.len().checked_sub(4).ok_or(BlobError::Truncated)?;
+        let (body, crc_bytes) = bytes
+            .split_at_checked(body_len)
+            .ok_or(BlobError::Truncated)?;
+        let mut crc = [0u8; 4];
+        crc.copy_from_slice(crc_bytes);
+        if CRC.checksum(body) != u32::from_le_bytes(crc) {
+            return Err(BlobError::Checksum);
+        }
+        let (model, rest) = postcard::take_from_bytes::<Self>(body).map_err(map_postcard)?;
+        if !rest.is_empty() {
+            return Err(BlobError::Malformed);
+        }
+        model.validate()?;
+        Ok(model)
+    }
+
+    /// The per-feature ranges as two points (lo, hi), for clamping.
+    pub fn range_points(&self) -> (Point<F>, Point<F>) {
+        let mut lo = Point::<F>::default();
+        let mut hi = Point::<F>::default();
+        for ((l, h), r) in lo.0.iter_mut().zip(hi.0.iter_mut()).zip(&self.ranges) {
+            *l = r.lo;
+            *h = r.hi;
+        }
+        (lo, hi)
+    }
+}

@@ -1,0 +1,182 @@
+//! The compensator: one channel's streaming state, driven by an immutable model.
+//!
+//! `compensated = raw − f(features)`, with a [`Status`] word that says how far the output can be
+//! trusted. The model is passed to every step rather than owned, so one model can drive several
+//! channels, a channel can run with no model at all (raw passed through, flagged), and swapping in a
+//! newly flashed model is an assignment. Bad data never panics:
+//!
+//! * a NaN/infinite input or a bad time step: the program state is not advanced, the last good
+//!   features are held, the sample is flagged [`Status::INPUT_FAULT`], and the skipped time is carried
+//!   into the next good step so rates and lags stay on the clock;
+//! * a feature outside the range seen in training: clamped to it, flagged [`Status::OUT_OF_RANGE`];
+//! * no model: the raw value passes through, flagged [`Status::NO_MODEL`].
+
+use crate::blob::Model;
+use crate::stream::ProgramState;
+
+/// Status word of one compensated sample: a set of flags, zero when all is well.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status(pub u8);
+
+impl Status {
+    /// Model present, inputs good and inside the trained range.
+    pub const OK: Status = Status(0);
+    /// No valid model: the output is the raw value.
+    pub const NO_MODEL: Status = Status(1);
+    /// A feature was outside its trained range and was clamped.
+    pub const OUT_OF_RANGE: Status = Status(2);
+    /// An input was NaN/infinite (or the raw value was): last good features held.
+    pub const INPUT_FAULT: Status = Status(4);
+
+    /// True when no flag is set.
+    pub fn is_ok(self) -> bool {
+        self.0 == 0
+    }
+
+    /// True when every flag of `other` is set in `self`.
+    pub fn contains(self, other: Status) -> bool {
+        self.0 & other.0 == other.0
+    }
+
+    /// `self` with the flags of `other` added.
+    #[must_use]
+    pub fn with(self, other: Status) -> Status {
+        Status(self.0 | other.0)
+    }
+}
+
+impl core::fmt::Display for Status {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        if self.is_ok() {
+            return write!(f, "ok");
+        }
+        let names = [
+            (Status::NO_MODEL, "no-model"),
+            (Status::OUT_OF_RANGE, "out-of-range"),
+            (Status::INPUT_FAULT, "input-fault"),
+        ];
+        let mut first = true;
+        for (flag, name) in names {
+            if self.contains(flag) {
+                write!(f, "{}{name}", if first { "" } else { "+" })?;
+                first = false;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One compensated sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Output {
+    /// `raw − correction`.
+    pub compensated: f32,
+    /// The model's estimate of the temperature-induced error (0 without a model or features).
+    pub correction: f32,
+    /// How far to trust it.
+    pub status: Status,
+}
+
+/// Streaming state of one channel: feature-program state, the last good features, the sample period.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Channel<const N: usize, const F: usize> {
+    state: ProgramState<N>,
+    features: [f32; F],
+    have_features: bool,
+    pending_dt: f32,
+    period_s: f32,
+}
+
+impl<const N: usize, const F: usize> Channel<N, F> {
+    /// A channel sampled every `period_s` seconds (used by [`Channel::step`]).
+    pub const fn new(period_s: f32) -> Self {
+        Self {
+            state: ProgramState::new(),
+            features: [0.0; F],
+            have_features: false,
+            pending_dt: 0.0,
+            period_s,
+        }
+    }
+
+    /// Forgets all history (after a gap, or when a new model is loaded).
+    pub fn reset(&mut self) {
+        *self = Self::new(self.period_s);
+    }
+
+    /// The last good (unclamped) features.
+    pub fn features(&self) -> &[f32; F] {
+        &self.features
+    }
+
+    /// One sample at the channel's fixed period.
+    pub fn step<const C: usize>(
+        &mut self,
+        model: Option<&Model<'_, C, F, N>>,
+        inputs: &[f32],
+        raw: f32,
+    ) -> Output {
+        self.step_dt(model, inputs, self.period_s, raw)
+    }
+
+    /// One sample, `dt` seconds after the previous one.
+    pub fn step_dt<const C: usize>(
+        &mut self,
+        model: Option<&Model<'_, C, F, N>>,
+        inputs: &[f32],
+        dt: f32,
+        raw: f32,
+    ) -> Output {
+        let Some(model) = model else {
+            return Output {
+                compensated: raw,
+                correction: 0.0,
+                status: Status::NO_MODEL,
+            };
+        };
+        let mut status = Status::OK;
+        let dt_total = self.pending_dt + dt;
+        let stepped = self.state.step(&model.program, inputs, dt_total);
+        match stepped.and_then(|()| self.state.features(&model.program, &mut self.features)) {
+            Ok(()) => {
+                self.have_features = true;
+                self.pending_dt = 0.0;
+            }
+            Err(_) => {
+                status = status.with(Status::INPUT_FAULT);
+                if stepped.is_err() && dt.is_finite() && dt > 0.0 {
+                    self.pending_dt = dt_total;
+                } else {
+                    self.pending_dt = 0.0;
+                }
+            }
+        }
+        if !raw.is_finite() {
+            status = status.with(Status::INPUT_FAULT);
+        }
+        if !self.have_features {
+            return Output {
+                compensated: raw,
+                correction: 0.0,
+                status: status.with(Status::INPUT_FAULT),
+            };
+        }
+        let mut x = self.features;
+        for (v, r) in x.iter_mut().zip(&model.ranges) {
+            if *v < r.lo {
+                *v = r.lo;
+                status = status.with(Status::OUT_OF_RANGE);
+            } else if *v > r.hi {
+                *v = r.hi;
+                status = status.with(Status::OUT_OF_RANGE);
+            }
+        }
+        let correction = model.rbf.eval(&x);
+        Output {
+            compensated: raw - correction,
+            correction,
+            status,
+        }
+    }
+}

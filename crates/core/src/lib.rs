@@ -1,0 +1,48 @@
+//! The compensation core: everything that must behave the same on the host trainer and on the IMU.
+//!
+//! `no_std`, no allocation, no `unsafe`. Four parts, each in its own module:
+//!
+//! * [`program`] — feature programs: a small expression language over named input columns
+//!   (`T = mean(t_anode_c, t_shell_c)`, `rate(T)`, `T * rate(T)`, `lag(T, 2400)`, …) compiled into a
+//!   fixed-capacity list of operations, and [`stream`] runs it sample by sample with bounded state.
+//!   The trainer computes its training features by running exactly this code over the CSV.
+//! * [`rbf`] — the Gaussian RBF evaluator with per-feature normalisation, per-center widths, an optional
+//!   linear term, and the fast exponential of [`fastexp`].
+//! * [`blob`] — the model blob: one serde type, postcard-encoded, with magic, version and CRC-32;
+//!   decoding any byte string yields a `Result`, never a panic.
+//! * [`compensator`] — the immutable model apart from the per-channel streaming state:
+//!   `step(inputs, raw) → (compensated, status)`.
+//!
+//! Capacities are const generics (`C` centers, `F` features, `N` program nodes), so the firmware sizes
+//! its models for its channels and the host uses the large defaults.
+#![no_std]
+
+pub mod blob;
+pub mod compensator;
+pub mod fastexp;
+pub mod parse;
+pub mod point;
+pub mod program;
+pub mod rbf;
+pub mod stream;
+pub mod testing;
+
+pub use blob::{BlobError, ColumnRoles, FeatureRange, Meta, Model, ResidualLevel, SensorKind};
+pub use compensator::{Channel, Output, Status};
+pub use parse::{ParseError, ParseErrorKind};
+pub use program::{Op, Program, ProgramBuilder, ProgramError};
+pub use rbf::Rbf;
+pub use stream::{ProgramState, StepError};
+
+/// Host-side default capacity: centers per model.
+pub const HOST_CENTERS: usize = 64;
+/// Host-side default capacity: features per model.
+pub const HOST_FEATURES: usize = 8;
+/// Host-side default capacity: operations per feature program.
+pub const HOST_NODES: usize = 48;
+/// Named input columns a program may read.
+pub const MAX_INPUTS: usize = 8;
+/// Named signals (`NAME = expr`) a program may define.
+pub const MAX_SIGNALS: usize = 8;
+/// Stateful operations (`rate`, `lag`, `hyst`) in one program.
+pub const MAX_STATEFUL: usize = 8;

@@ -1,0 +1,126 @@
+//! Blob encoding: round trip, and rejection of every corruption without panicking.
+#![allow(clippy::unwrap_used, missing_docs)]
+
+use proptest::prelude::*;
+use tcomp_core::blob::{FORMAT_VERSION, MAGIC};
+use tcomp_core::testing::example_model;
+use tcomp_core::{BlobError, Model};
+
+type HostModel<'a> = Model<'a, 64, 8, 48>;
+
+fn encoded(n_centers: usize, seed: u32) -> Vec<u8> {
+    let m = example_model::<64, 8, 48>(n_centers, seed);
+    let mut buf = vec![0u8; 8192];
+    let n = m.encode(&mut buf).unwrap();
+    buf.truncate(n);
+    buf
+}
+
+#[test]
+fn reasons_are_specific() {
+    let good = encoded(8, 1);
+    assert_eq!(HostModel::decode(&[]).unwrap_err(), BlobError::Truncated);
+    assert_eq!(
+        HostModel::decode(b"NOPE....").unwrap_err(),
+        BlobError::BadMagic
+    );
+    let mut v2 = good.clone();
+    v2[4] = FORMAT_VERSION as u8 + 1;
+    assert_eq!(
+        HostModel::decode(&v2).unwrap_err(),
+        BlobError::UnsupportedVersion(FORMAT_VERSION + 1)
+    );
+    let mut flipped = good.clone();
+    let mid = flipped.len() / 2;
+    flipped[mid] ^= 0x10;
+    assert_eq!(
+        HostModel::decode(&flipped).unwrap_err(),
+        BlobError::Checksum
+    );
+    assert_eq!(&good[..4], &MAGIC);
+}
+
+#[test]
+fn capacity_is_checked_by_the_smaller_firmware_type() {
+    let blob = encoded(40, 2);
+    assert!(Model::<'_, 64, 8, 48>::decode(&blob).is_ok());
+    assert_eq!(
+        Model::<'_, 32, 8, 48>::decode(&blob).unwrap_err(),
+        BlobError::CapacityExceeded
+    );
+    // 8 features declared by the host type; a 4-feature build reads the same program fine
+    // only if it was encoded with F = 4, since Point<F> has a fixed width on the wire.
+    let m4 = example_model::<32, 4, 24>(32, 3);
+    let mut buf = [0u8; 4096];
+    let n = m4.encode(&mut buf).unwrap();
+    assert_eq!(Model::<'_, 32, 4, 24>::decode(&buf[..n]).unwrap(), m4);
+}
+
+#[test]
+fn non_finite_numbers_are_refused_on_encode_and_named() {
+    let mut m = example_model::<64, 8, 48>(8, 4);
+    m.rbf.weights[3] = f32::NAN;
+    let mut buf = vec![0u8; 8192];
+    assert_eq!(
+        m.encode(&mut buf).unwrap_err(),
+        BlobError::NonFinite("rbf.weights")
+    );
+    let mut m = example_model::<64, 8, 48>(8, 4);
+    m.rbf.gamma[0] = -1.0;
+    assert!(matches!(
+        m.encode(&mut buf).unwrap_err(),
+        BlobError::Inconsistent(_)
+    ));
+}
+
+#[test]
+fn every_single_byte_corruption_is_rejected() {
+    let good = encoded(16, 5);
+    for i in 0..good.len() {
+        for delta in [1u8, 0x80, 0xFF] {
+            let mut bad = good.clone();
+            bad[i] ^= delta;
+            assert!(
+                HostModel::decode(&bad).is_err(),
+                "byte {i} ^ {delta:#x} accepted"
+            );
+        }
+    }
+    for len in 0..good.len() {
+        assert!(
+            HostModel::decode(&good[..len]).is_err(),
+            "prefix of {len} accepted"
+        );
+    }
+}
+
+proptest! {
+    #[test]
+    fn encode_decode_is_identity(n in 1usize..=64, seed in 1u32..u32::MAX) {
+        let m = example_model::<64, 8, 48>(n, seed);
+        let mut buf = vec![0u8; 8192];
+        let len = m.encode(&mut buf).unwrap();
+        prop_assert_eq!(HostModel::decode(&buf[..len]).unwrap(), m);
+    }
+
+    #[test]
+    fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..600)) {
+        let _ = HostModel::decode(&bytes);
+        let mut with_magic = MAGIC.to_vec();
+        with_magic.push(FORMAT_VERSION as u8);
+        with_magic.extend_from_slice(&bytes);
+        prop_assert!(HostModel::decode(&with_magic).is_err());
+    }
+
+    #[test]
+    fn mutated_blobs_are_rejected(seed in 1u32..1000, edits in proptest::collection::vec((any::<usize>(), 1u8..=255), 1..6)) {
+        let good = encoded(12, seed);
+        let mut bad = good.clone();
+        for (pos, x) in edits {
+            let i = pos % bad.len();
+            bad[i] ^= x;
+        }
+        prop_assume!(bad != good);
+        prop_assert!(HostModel::decode(&bad).is_err());
+    }
+}

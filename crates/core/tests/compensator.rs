@@ -1,0 +1,86 @@
+//! The compensator's statuses and its behaviour on faults.
+#![allow(clippy::unwrap_used, missing_docs)]
+
+use tcomp_core::testing::{example_model, example_sample};
+use tcomp_core::{Channel, Model, Status};
+
+type M = Model<'static, 32, 4, 24>;
+
+fn model() -> M {
+    example_model::<32, 4, 24>(32, 11)
+}
+
+#[test]
+fn compensates_and_matches_program_plus_rbf() {
+    let m = model();
+    let mut ch = Channel::<24, 4>::new(0.01);
+    for n in 0..500 {
+        let (temps, raw) = example_sample(n, 0.01);
+        let out = ch.step(Some(&m), &temps, raw);
+        assert_eq!(out.status, Status::OK, "sample {n}");
+        let expect = m.rbf.eval(ch.features());
+        assert_eq!(out.correction, expect);
+        assert_eq!(out.compensated, raw - expect);
+    }
+}
+
+#[test]
+fn no_model_passes_raw_through() {
+    let mut ch = Channel::<24, 4>::new(0.01);
+    let out = ch.step::<32>(None, &[1.0, 2.0, 3.0], 5.0);
+    assert_eq!((out.compensated, out.status), (5.0, Status::NO_MODEL));
+}
+
+#[test]
+fn nan_input_holds_last_good_features_and_keeps_the_clock() {
+    let m = model();
+    let mut a = Channel::<24, 4>::new(1.0);
+    let mut b = Channel::<24, 4>::new(1.0);
+    let mut held = [0.0; 4];
+    for n in 0..200u32 {
+        let (temps, raw) = example_sample(n, 1.0);
+        let oa = a.step(Some(&m), &temps, raw);
+        // Channel b loses samples 100..110 to a NaN thermometer, then reads a 11 s step at once.
+        if (100..110).contains(&n) {
+            let ob = b.step(Some(&m), &[f32::NAN, temps[1], temps[2]], raw);
+            assert!(ob.status.contains(Status::INPUT_FAULT));
+            assert_eq!(b.features(), &held);
+            assert!(ob.compensated.is_finite());
+        } else {
+            let ob = b.step(Some(&m), &temps, raw);
+            held = *b.features();
+            if n < 100 {
+                assert_eq!(oa, ob);
+            } else {
+                assert!(ob.status.is_ok());
+            }
+        }
+    }
+    // After the gap the lag states caught up on the skipped 10 s: features agree closely again.
+    let diff = (a.features()[0] - b.features()[0]).abs();
+    assert!(diff < 1e-3, "mean temperature differs by {diff}");
+}
+
+#[test]
+fn out_of_range_is_clamped_and_flagged() {
+    let m = model();
+    let mut ch = Channel::<24, 4>::new(1.0);
+    let out = ch.step(Some(&m), &[90.0, 90.0, 90.0], 0.0);
+    assert!(out.status.contains(Status::OUT_OF_RANGE));
+    let mut clamped = *ch.features();
+    clamped[0] = 60.0;
+    assert_eq!(out.correction, m.rbf.eval(&clamped));
+}
+
+#[test]
+fn fault_before_any_good_sample_passes_raw() {
+    let m = model();
+    let mut ch = Channel::<24, 4>::new(1.0);
+    let out = ch.step(Some(&m), &[f32::INFINITY, 0.0, 0.0], 3.0);
+    assert_eq!((out.compensated, out.correction), (3.0, 0.0));
+    assert!(out.status.contains(Status::INPUT_FAULT));
+    assert_eq!(
+        format!("{}", Status::INPUT_FAULT.with(Status::OUT_OF_RANGE)),
+        "out-of-range+input-fault"
+    );
+}
