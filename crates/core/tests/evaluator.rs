@@ -1,5 +1,5 @@
 //! The f32 RBF evaluator against an f64 reference of the same formula.
-#![allow(clippy::unwrap_used, missing_docs)]
+#![allow(clippy::unwrap_used, clippy::needless_range_loop, missing_docs)]
 
 use tcomp_core::Model;
 use tcomp_core::testing::{XorShift, example_model};
