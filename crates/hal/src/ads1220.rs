@@ -21,10 +21,10 @@
 //!
 //! | reg | bits 7..0                                                                         |
 //! |-----|-----------------------------------------------------------------------------------|
-//! | 0   | MUX[3:0] · GAIN[2:0] · PGA_BYPASS                                                 |
-//! | 1   | DR[2:0] · MODE[1:0] · CM · TS · BCS                                               |
-//! | 2   | VREF[1:0] · 50/60[1:0] · PSW · IDAC[2:0]                                          |
-//! | 3   | I1MUX[2:0] · I2MUX[2:0] · DRDYM · 0                                               |
+//! | 0   | MUX\[3:0\] · GAIN\[2:0\] · PGA_BYPASS                                                 |
+//! | 1   | DR\[2:0\] · MODE\[1:0\] · CM · TS · BCS                                               |
+//! | 2   | VREF\[1:0\] · 50/60\[1:0\] · PSW · IDAC\[2:0\]                                          |
+//! | 3   | I1MUX\[2:0\] · I2MUX\[2:0\] · DRDYM · 0                                               |
 //!
 //! Conversion data are 24-bit two's complement: `code = V_in · gain / V_ref · 2²³`, clipped at
 //! `0x7FFFFF` (+full scale) and `0x800000` (−full scale).
@@ -86,7 +86,7 @@ pub const CODE_MIN: i32 = -0x80_0000;
 /// 2²³, the code of `V_in = V_ref / gain`.
 pub const FULL_SCALE: f32 = 8_388_608.0;
 
-/// Input multiplexer (register 0, MUX[3:0]): positive and negative input.
+/// Input multiplexer (register 0, MUX\[3:0\]): positive and negative input.
 #[derive(Debug, Copy, Clone, Eq, PartialEq)]
 #[repr(u8)]
 #[allow(missing_docs)]
@@ -117,7 +117,7 @@ impl Mux {
     }
 }
 
-/// PGA gain (register 0, GAIN[2:0]).
+/// PGA gain (register 0, GAIN\[2:0\]).
 #[derive(Debug, Copy, Clone, Eq, PartialEq)]
 #[repr(u8)]
 #[allow(missing_docs)]
@@ -139,7 +139,7 @@ impl Gain {
     }
 }
 
-/// Data rate (register 1, DR[2:0]), named by the normal-mode rate; duty-cycle mode divides by 4,
+/// Data rate (register 1, DR\[2:0\]), named by the normal-mode rate; duty-cycle mode divides by 4,
 /// turbo mode doubles it.
 #[derive(Debug, Copy, Clone, Eq, PartialEq)]
 #[repr(u8)]
@@ -154,7 +154,7 @@ pub enum DataRate {
     Sps1000 = 6,
 }
 
-/// Operating mode (register 1, MODE[1:0]).
+/// Operating mode (register 1, MODE\[1:0\]).
 #[derive(Debug, Copy, Clone, Eq, PartialEq)]
 #[repr(u8)]
 pub enum OperatingMode {
@@ -175,7 +175,7 @@ pub enum ConversionMode {
     Continuous,
 }
 
-/// Reference selection (register 2, VREF[1:0]).
+/// Reference selection (register 2, VREF\[1:0\]).
 #[derive(Debug, Copy, Clone, Eq, PartialEq)]
 #[repr(u8)]
 pub enum Vref {
@@ -195,7 +195,7 @@ impl Vref {
     }
 }
 
-/// FIR filter for line-frequency rejection (register 2, 50/60[1:0]); effective only at 20 SPS in
+/// FIR filter for line-frequency rejection (register 2, 50/60\[1:0\]); effective only at 20 SPS in
 /// normal mode (5 SPS in duty-cycle mode).
 #[derive(Debug, Copy, Clone, Eq, PartialEq)]
 #[repr(u8)]
@@ -210,7 +210,7 @@ pub enum LineRejection {
     Hz60 = 3,
 }
 
-/// Excitation current of both IDACs (register 2, IDAC[2:0]).
+/// Excitation current of both IDACs (register 2, IDAC\[2:0\]).
 #[derive(Debug, Copy, Clone, Eq, PartialEq)]
 #[repr(u8)]
 #[allow(missing_docs)]
@@ -225,7 +225,7 @@ pub enum IdacCurrent {
     Ua1500 = 7,
 }
 
-/// Pin an IDAC is routed to (register 3, I1MUX[2:0] / I2MUX[2:0]).
+/// Pin an IDAC is routed to (register 3, I1MUX\[2:0\] / I2MUX\[2:0\]).
 #[derive(Debug, Copy, Clone, Eq, PartialEq)]
 #[repr(u8)]
 #[allow(missing_docs)]
@@ -407,7 +407,10 @@ impl<E: fmt::Debug> fmt::Display for Error<E> {
             Self::Spi(e) => write!(f, "ADS1220: SPI error {e:?}"),
             Self::InvalidConfig => f.write_str("ADS1220: unsupported configuration"),
             Self::ConfigMismatch { written, read } => {
-                write!(f, "ADS1220: wrote registers {written:02x?}, read back {read:02x?}")
+                write!(
+                    f,
+                    "ADS1220: wrote registers {written:02x?}, read back {read:02x?}"
+                )
             }
             Self::OpenCircuit { code } => write!(f, "ADS1220: open circuit (code {code:#x})"),
             Self::ShortCircuit { code } => write!(f, "ADS1220: short circuit (code {code})"),
@@ -517,10 +520,7 @@ impl<SPI: SpiDevice> Ads1220<SPI> {
     pub fn read_code(&mut self) -> Result<i32, Error<SPI::Error>> {
         let mut data = [0u8; 3];
         self.spi
-            .transaction(&mut [
-                Operation::Write(&[cmd::RDATA]),
-                Operation::Read(&mut data),
-            ])
+            .transaction(&mut [Operation::Write(&[cmd::RDATA]), Operation::Read(&mut data)])
             .map_err(Error::Spi)?;
         Ok(code_from_bytes(data))
     }
@@ -562,7 +562,7 @@ impl<SPI: SpiDevice> RtdThermometer<SPI> {
             && c.idac != IdacCurrent::Off
             && (c.idac1 != IdacRoute::Disabled || c.idac2 != IdacRoute::Disabled)
             && !c.temperature_sensor;
-        if !ratiometric || !(self.r_ref_ohm > 0.0) || !self.r_ref_ohm.is_finite() {
+        if !ratiometric || !crate::is_positive(self.r_ref_ohm) {
             return Err(Error::InvalidConfig);
         }
         self.adc.init(delay)

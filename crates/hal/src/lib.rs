@@ -33,3 +33,9 @@ pub mod thermometer;
 pub use counter::{PulseCounter, wrapping_delta};
 pub use error::{Error, ErrorKind, ErrorType};
 pub use thermometer::Thermometer;
+
+/// `x` is a finite number greater than zero (false for NaN).
+#[inline]
+pub(crate) fn is_positive(x: f32) -> bool {
+    x.is_finite() && x > 0.0
+}

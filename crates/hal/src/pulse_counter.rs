@@ -24,8 +24,8 @@
 //! | addr        | name       | content                                                                 |
 //! |-------------|------------|-------------------------------------------------------------------------|
 //! | `0x00`      | ID         | `0x5544_4301`: ASCII "UDC" and register-map version 1                  |
-//! | `0x01`      | INFO       | [7:0] number of channels (1…8) · [15:8] counter width in bits (32) · [31:16] timestamp clock in kHz |
-//! | `0x02`      | STATUS     | snapshot of the event flags since the previous LATCH: [7:0] LOST\[ch\] pulses lost (up and down edges in one counter-clock cycle, or input faster than the synchroniser) · [15:8] FAULT\[ch\] the instrument's fault/valid line was asserted (RLG path-length control or dither out of lock, QMA rebalance loop saturated) · [30:16] reserved, 0 · \[31\] CLOCK_FAULT counter reference clock missing or PLL unlocked |
+//! | `0x01`      | INFO       | \[7:0\] number of channels (1…8) · \[15:8\] counter width in bits (32) · \[31:16\] timestamp clock in kHz |
+//! | `0x02`      | STATUS     | snapshot of the event flags since the previous LATCH: \[7:0\] LOST\[ch\] pulses lost (up and down edges in one counter-clock cycle, or input faster than the synchroniser) · \[15:8\] FAULT\[ch\] the instrument's fault/valid line was asserted (RLG path-length control or dither out of lock, QMA rebalance loop saturated) · \[30:16\] reserved, 0 · \[31\] CLOCK_FAULT counter reference clock missing or PLL unlocked |
 //! | `0x03`      | TIMESTAMP  | snapshot of a free-running counter of the timestamp clock                |
 //! | `0x04 + ch` | COUNT\[ch\]| snapshot of channel `ch`'s free-running up/down counter: +1 per up pulse, −1 per down pulse, wrapping modulo 2³² |
 //!
@@ -277,7 +277,9 @@ impl<E: fmt::Debug> fmt::Display for Error<E> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Spi(e) => write!(f, "counter block: SPI error {e:?}"),
-            Self::WrongId { id } => write!(f, "counter block: ID {id:#010x}, expected {ID_VALUE:#010x}"),
+            Self::WrongId { id } => {
+                write!(f, "counter block: ID {id:#010x}, expected {ID_VALUE:#010x}")
+            }
             Self::Unsupported { info } => write!(f, "counter block: unsupported INFO {info:#010x}"),
             Self::NotInitialised => f.write_str("counter block: not initialised"),
             Self::NoSuchChannel => f.write_str("counter block: no such channel"),

@@ -21,6 +21,7 @@
 //! [`ErrorKind::OutOfRange`] rather than extrapolate.
 
 use crate::error::ErrorKind;
+use crate::is_positive;
 
 /// Number of Newton steps of the inverse below 0 °C (fixed; there is no convergence loop).
 pub const NEWTON_STEPS: usize = 4;
@@ -58,7 +59,12 @@ impl Rtd {
 
     /// An RTD with individually calibrated coefficients.
     pub const fn with_coefficients(r0_ohm: f32, a: f32, b: f32, c: f32) -> Self {
-        Self { r0: r0_ohm, a, b, c }
+        Self {
+            r0: r0_ohm,
+            a,
+            b,
+            c,
+        }
     }
 
     /// Resistance at 0 °C (Ω).
@@ -111,17 +117,17 @@ impl Rtd {
     /// `OutOfRange` if the resistance is not finite or corresponds to a temperature outside
     /// −200…850 °C.
     pub fn temperature(&self, r_ohm: f32) -> Result<f32, ErrorKind> {
-        if !(self.r0 > 0.0) || !(self.r_min()..=self.r_max()).contains(&r_ohm) {
+        if !is_positive(self.r0) || !(self.r_min()..=self.r_max()).contains(&r_ohm) {
             return Err(ErrorKind::OutOfRange);
         }
         let x = r_ohm / self.r0 - 1.0;
         // Root of the quadratic (exact above 0 °C, the starting point below).
         let disc = self.a * self.a + 4.0 * self.b * x;
-        if !(disc >= 0.0) {
+        if disc.is_nan() || disc < 0.0 {
             return Err(ErrorKind::OutOfRange);
         }
         let denom = self.a + libm::sqrtf(disc);
-        if !(denom > 0.0) {
+        if !is_positive(denom) {
             return Err(ErrorKind::OutOfRange);
         }
         let mut t = 2.0 * x / denom;
@@ -129,7 +135,7 @@ impl Rtd {
             let target = r_ohm / self.r0;
             for _ in 0..NEWTON_STEPS {
                 let slope = self.ratio_slope_below_zero(t);
-                if !(slope > 0.0) {
+                if !is_positive(slope) {
                     return Err(ErrorKind::OutOfRange);
                 }
                 t -= (self.ratio(t) - target) / slope;

@@ -92,7 +92,7 @@ impl ChannelScale {
     ///
     /// `OutOfRange` if `dt_s` is not a positive finite number.
     pub fn rate(&self, counts: i32, dt_s: f32) -> Result<f32, ErrorKind> {
-        if !(dt_s > 0.0) || !dt_s.is_finite() {
+        if !crate::is_positive(dt_s) {
             return Err(ErrorKind::OutOfRange);
         }
         Ok(self.increment(counts) / dt_s)

@@ -13,6 +13,7 @@
 //! to [`SteinhartHart::new`]; outside them both directions return [`ErrorKind::OutOfRange`].
 
 use crate::error::ErrorKind;
+use crate::is_positive;
 
 const KELVIN: f32 = 273.15;
 
@@ -45,12 +46,12 @@ impl SteinhartHart {
 
     /// Temperature (°C) of resistance `r_ohm`.
     pub fn temperature(&self, r_ohm: f32) -> Result<f32, ErrorKind> {
-        if !(r_ohm > 0.0) || !r_ohm.is_finite() {
+        if !is_positive(r_ohm) {
             return Err(ErrorKind::OutOfRange);
         }
         let l = libm::logf(r_ohm);
         let inv_t = self.a + l * (self.b + self.c * l * l);
-        if !(inv_t > 0.0) {
+        if !is_positive(inv_t) {
             return Err(ErrorKind::OutOfRange);
         }
         let t = 1.0 / inv_t - KELVIN;
