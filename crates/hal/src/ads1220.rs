@@ -536,6 +536,11 @@ pub fn code_to_ohms(code: i32, r_ref_ohm: f32, gain: Gain) -> f32 {
 }
 
 /// A platinum RTD thermometer on an ADS1220: the [`Thermometer`] the firmware reads.
+///
+/// Each read is one RDATA frame (4 bytes) and returns the latest completed conversion: with the
+/// continuous configuration of [`Config::rtd_4wire`] (20 SPS) a 200 Hz loop sees each conversion
+/// about ten times, as a staircase. In single-shot mode, call `adc().start()` and wait a conversion
+/// time (or DRDY) before reading.
 #[derive(Debug)]
 pub struct RtdThermometer<SPI> {
     adc: Ads1220<SPI>,

@@ -11,6 +11,35 @@
 use crate::error::ErrorType;
 
 /// One up/down pulse channel.
+///
+/// A replay board can keep the recorded raw register values and let [`wrapping_delta`] do the
+/// rest, so recorded wrap-arounds are exercised exactly as on hardware:
+///
+/// ```
+/// use tcomp_hal::{ErrorKind, ErrorType, PulseCounter, wrapping_delta};
+///
+/// struct Replay<'a> {
+///     raw: &'a [u32],
+///     next: usize,
+///     last: u32,
+/// }
+/// impl ErrorType for Replay<'_> {
+///     type Error = ErrorKind;
+/// }
+/// impl PulseCounter for Replay<'_> {
+///     fn read_delta(&mut self) -> Result<i32, ErrorKind> {
+///         let now = *self.raw.get(self.next).ok_or(ErrorKind::NotReady)?;
+///         self.next += 1;
+///         let delta = wrapping_delta(self.last, now, 32);
+///         self.last = now;
+///         Ok(delta)
+///     }
+/// }
+///
+/// let mut c = Replay { raw: &[0xFFFF_FFFE, 3], next: 0, last: 0xFFFF_FFF0 };
+/// assert_eq!(c.read_delta(), Ok(14));
+/// assert_eq!(c.read_delta(), Ok(5)); // across the 2³² wrap
+/// ```
 pub trait PulseCounter: ErrorType {
     /// Signed number of pulses since the previous call (up pulses positive, down pulses negative).
     ///

@@ -351,6 +351,7 @@ impl<SPI: SpiDevice, const N: usize> CounterBlock<SPI, N> {
                 Operation::Read(&mut buf),
             ])
             .map_err(Error::Spi)?;
+        // `be32` cannot fail on these fixed-size buffers; the `?` keeps the code free of panics.
         let id = be32(&buf, 0).ok_or(Error::NoSuchChannel)?;
         let raw_info = be32(&buf, 1).ok_or(Error::NoSuchChannel)?;
         if id != ID_VALUE {

@@ -7,6 +7,33 @@
 use crate::error::ErrorType;
 
 /// One temperature channel.
+///
+/// A board that replays recorded data implements it directly, using [`ErrorKind`](crate::ErrorKind)
+/// as its error type:
+///
+/// ```
+/// use tcomp_hal::{ErrorKind, ErrorType, Thermometer};
+///
+/// struct Replay<'a> {
+///     samples: &'a [f32],
+///     next: usize,
+/// }
+/// impl ErrorType for Replay<'_> {
+///     type Error = ErrorKind;
+/// }
+/// impl Thermometer for Replay<'_> {
+///     fn read_celsius(&mut self) -> Result<f32, ErrorKind> {
+///         let t = *self.samples.get(self.next).ok_or(ErrorKind::NotReady)?;
+///         self.next += 1;
+///         if t.is_nan() { Err(ErrorKind::Bus) } else { Ok(t) } // a NaN marks an injected bus error
+///     }
+/// }
+///
+/// let mut th = Replay { samples: &[21.5, f32::NAN], next: 0 };
+/// assert_eq!(th.read_celsius(), Ok(21.5));
+/// assert_eq!(th.read_celsius(), Err(ErrorKind::Bus));
+/// assert_eq!(th.read_celsius(), Err(ErrorKind::NotReady));
+/// ```
 pub trait Thermometer: ErrorType {
     /// Read the temperature in °C.
     ///

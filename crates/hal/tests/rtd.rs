@@ -68,6 +68,7 @@ fn dense_round_trip_sweep() {
             worst = worst.max((back - t).abs());
         }
     }
+    eprintln!("worst CVD round-trip error: {worst} °C");
     assert!(worst < 1e-3, "worst round-trip error {worst} °C");
 }
 
