@@ -1,0 +1,610 @@
+//! Scenarios: what to simulate (sensor, chamber profile, effects, noise, rates, seed), from Rust or
+//! TOML, with validation errors that name the field.
+//!
+//! Why: one plain data type drives the simulator, whether it comes from a preset, a test that hides
+//! one effect, or a user's TOML file; validation happens once, here, so the simulator can assume
+//! sane values.
+//!
+//! # TOML format
+//!
+//! ```toml
+//! name = "ifog-custom"          # optional
+//! description = "..."           # optional
+//! seed = 7                      # optional, default 1
+//! rate_hz = 1.0                 # internal sensor rate, optional, default 1 Hz
+//! step_s = 1.0                  # output step (averaging), optional, default 1 s; a multiple of 1/rate_hz
+//!
+//! [sensor]
+//! kind = "ifog"                 # rlg | qma | ifog
+//! reference = 10.6357           # optional: constant true input, output units (default: earth rate
+//!                               # at 45° latitude for gyros, 1 g = 1e6 µg for the QMA)
+//! [sensor.thermal.t_coil_c]     # optional overrides of a thermometer's defaults
+//! tau_s = 1200                  # lag behind chamber air, s
+//! self_heating_c = 1.0          # final self-heating rise, °C
+//! self_heating_tau_s = 1800     # its time constant, s
+//! noise_c = 0.005               # thermometer white noise, °C
+//! lsb_c = 0.01                  # thermometer quantisation, °C
+//!
+//! [noise]                       # optional; each key overrides the sensor's default
+//! arw_deg_per_sqrt_h = 0.005    # gyros: angle random walk (or vrw_ug_per_sqrt_hz for the QMA,
+//!                               # or white_density in output units·√s)
+//! bias_instability = 0.01       # Gauss–Markov std, output units
+//! correlation_s = 600           # its correlation time, s
+//! pulse_weight = 0.0            # output units·s per pulse (″ for gyros, µg·s for the QMA); 0 = none
+//!
+//! [supply]                      # optional: the recorded supply voltage `supply_v`
+//! nominal_v = 28.0
+//! wander_v = 0.5                # std of its slow Gauss–Markov wander, V
+//! wander_tau_s = 1800
+//! noise_v = 0.002
+//!
+//! [profile]                     # chamber air: start and segments ...
+//! start_c = 10
+//! segments = [
+//!   { kind = "hold", duration_s = 3600 },
+//!   { kind = "ramp", to_c = 40, rate_c_per_min = 0.5 },
+//!   { kind = "hold", duration_s = 7200 },
+//! ]
+//! # ... or a seeded random profile instead of start_c/segments:
+//! # random = { seed = 3, start_c = 20, min_c = -10, max_c = 40, max_rate_c_per_min = 1, duration_s = 21600 }
+//!
+//! [verify_profile]              # optional, same shape: the verification run (default: a seeded
+//!                               # random profile over the training range)
+//!
+//! [[effects]]                   # any number; see `Effect` for each one's keys
+//! name = "poly"
+//! coefficients = [0.005, 1e-4, 2e-6]
+//! [[effects]]
+//! name = "shupe"
+//! coefficient = 0.01
+//! ```
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::effects::{Context, Effect, EffectKind};
+use crate::error::{Error, Result};
+use crate::noise::NoiseSpec;
+use crate::profile::{Profile, RandomProfile, Segment};
+use crate::thermal::ThermometerSpec;
+
+/// The kind of sensor simulated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SensorKind {
+    /// Ring laser gyro: anode, cathode and shell thermometers; output °/h; pulse output.
+    Rlg,
+    /// Quartz accelerometer: one thermometer; output µg; pulse output.
+    Qma,
+    /// Fiber-optic gyro: one thermometer on the coil; output °/h.
+    Ifog,
+}
+
+/// Earth rate, °/h.
+pub const EARTH_RATE_DPH: f64 = 15.041;
+
+impl SensorKind {
+    /// Lower-case name (`rlg`, `qma`, `ifog`).
+    pub fn name(self) -> &'static str {
+        match self {
+            SensorKind::Rlg => "rlg",
+            SensorKind::Qma => "qma",
+            SensorKind::Ifog => "ifog",
+        }
+    }
+
+    /// The sensor of this name.
+    pub fn from_name(name: &str) -> Option<SensorKind> {
+        [SensorKind::Rlg, SensorKind::Qma, SensorKind::Ifog]
+            .into_iter()
+            .find(|k| k.name() == name)
+    }
+
+    /// Output unit as written in the truth file (`deg/h` or `ug`).
+    pub fn unit(self) -> &'static str {
+        match self {
+            SensorKind::Qma => "ug",
+            _ => "deg/h",
+        }
+    }
+
+    /// Output column (`gyro_dph` or `accel_ug`).
+    pub fn output_column(self) -> &'static str {
+        match self {
+            SensorKind::Qma => "accel_ug",
+            _ => "gyro_dph",
+        }
+    }
+
+    /// Reference column (`ref_dph` or `ref_ug`).
+    pub fn reference_column(self) -> &'static str {
+        match self {
+            SensorKind::Qma => "ref_ug",
+            _ => "ref_dph",
+        }
+    }
+
+    /// Decimals written for the output and reference columns.
+    pub fn output_decimals(self) -> usize {
+        match self {
+            SensorKind::Qma => 3,
+            _ => 6,
+        }
+    }
+
+    /// Default thermometers with realistic time constants and self-heating.
+    pub fn default_thermometers(self) -> Vec<ThermometerSpec> {
+        match self {
+            SensorKind::Rlg => vec![
+                ThermometerSpec::new("t_anode_c", 1100.0, 3.0, 900.0),
+                ThermometerSpec::new("t_cathode_c", 1300.0, 2.0, 1200.0),
+                ThermometerSpec::new("t_shell_c", 800.0, 0.8, 1800.0),
+            ],
+            SensorKind::Qma => vec![ThermometerSpec::new("t_qma_c", 900.0, 0.6, 1200.0)],
+            SensorKind::Ifog => vec![ThermometerSpec::new("t_coil_c", 1200.0, 1.0, 1800.0)],
+        }
+    }
+
+    /// Default output noise: navigation grade.
+    pub fn default_noise(self) -> NoiseSpec {
+        match self {
+            // ARW 0.003 °/√h, BI 0.003 °/h, 0.5″ pulses (after 4× interpolation).
+            SensorKind::Rlg => NoiseSpec::gyro(0.003, 0.003, 600.0, 0.5),
+            // VRW 10 µg/√Hz, BI 5 µg, 50 µg·s pulses.
+            SensorKind::Qma => NoiseSpec::accel(10.0, 5.0, 600.0, 50.0),
+            // ARW 0.005 °/√h, BI 0.01 °/h, closed-loop digital output (no pulse quantisation).
+            SensorKind::Ifog => NoiseSpec::gyro(0.005, 0.01, 600.0, 0.0),
+        }
+    }
+
+    /// Default reference: vertical earth-rate component at 45° latitude for gyros, 1 g for the QMA.
+    pub fn default_reference(self) -> f64 {
+        match self {
+            SensorKind::Qma => 1.0e6,
+            _ => EARTH_RATE_DPH * 45f64.to_radians().sin(),
+        }
+    }
+}
+
+/// The recorded supply voltage `supply_v`: nominal plus a slow Gauss–Markov wander and white noise.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SupplySpec {
+    /// Nominal voltage, V.
+    pub nominal_v: f64,
+    /// Std of the slow wander, V.
+    pub wander_v: f64,
+    /// Correlation time of the wander, s.
+    pub wander_tau_s: f64,
+    /// White noise of the reading, V.
+    pub noise_v: f64,
+}
+
+impl Default for SupplySpec {
+    fn default() -> Self {
+        SupplySpec {
+            nominal_v: 28.0,
+            wander_v: 0.5,
+            wander_tau_s: 1800.0,
+            noise_v: 0.002,
+        }
+    }
+}
+
+/// Everything the simulator needs for one run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Scenario {
+    /// Short name (used in the truth file).
+    pub name: String,
+    /// One-line description.
+    pub description: String,
+    /// Sensor kind.
+    pub sensor: SensorKind,
+    /// Constant true input in output units (earth-rate or gravity component), written as the
+    /// reference column.
+    pub reference: f64,
+    /// Thermometers, in column order (names fixed by the sensor kind).
+    pub thermometers: Vec<ThermometerSpec>,
+    /// Output noise.
+    pub noise: NoiseSpec,
+    /// Supply voltage.
+    pub supply: SupplySpec,
+    /// Chamber air profile.
+    pub profile: Profile,
+    /// Bias effects (any combination, including none).
+    pub effects: Vec<Effect>,
+    /// Internal sensor rate, Hz.
+    pub rate_hz: f64,
+    /// Output step, s (a whole multiple of `1/rate_hz`; rows are averages over it).
+    pub step_s: f64,
+    /// Seed of all random draws.
+    pub seed: u64,
+}
+
+impl Scenario {
+    /// A scenario with the sensor's defaults, no effects, 1 Hz output, seed 1.
+    pub fn new(sensor: SensorKind, profile: Profile) -> Self {
+        Scenario {
+            name: sensor.name().to_string(),
+            description: String::new(),
+            sensor,
+            reference: sensor.default_reference(),
+            thermometers: sensor.default_thermometers(),
+            noise: sensor.default_noise(),
+            supply: SupplySpec::default(),
+            profile,
+            effects: Vec::new(),
+            rate_hz: 1.0,
+            step_s: 1.0,
+            seed: 1,
+        }
+    }
+
+    /// Replaces the effects.
+    pub fn with_effects(mut self, effects: Vec<Effect>) -> Self {
+        self.effects = effects;
+        self
+    }
+
+    /// Adds the sensor's default effect of each kind in `kinds` (see [`Effect::default_for`]).
+    pub fn with_default_effects(mut self, kinds: &[EffectKind]) -> Self {
+        self.effects
+            .extend(kinds.iter().map(|&k| Effect::default_for(k, self.sensor)));
+        self
+    }
+
+    /// Keeps only the effects of the given kinds.
+    pub fn retain_effects(mut self, kinds: &[EffectKind]) -> Self {
+        self.effects.retain(|e| kinds.contains(&e.kind()));
+        self
+    }
+
+    /// Removes every effect of `kind` (to "hide" it from a model).
+    pub fn without_effect(mut self, kind: EffectKind) -> Self {
+        self.effects.retain(|e| e.kind() != kind);
+        self
+    }
+
+    /// Sets the seed.
+    pub fn with_seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// Sets the internal rate and the output step.
+    pub fn with_rate(mut self, rate_hz: f64, step_s: f64) -> Self {
+        self.rate_hz = rate_hz;
+        self.step_s = step_s;
+        self
+    }
+
+    /// Internal samples per output row. Assumes a validated scenario.
+    pub fn samples_per_row(&self) -> u64 {
+        (self.step_s * self.rate_hz).round().max(1.0) as u64
+    }
+
+    /// Number of output rows (complete output steps within the profile).
+    pub fn rows(&self) -> u64 {
+        let k = self.samples_per_row();
+        let samples = (self.profile.duration_s() * self.rate_hz + 1e-6).floor() as u64;
+        samples / k
+    }
+
+    /// Column names of the output file, in order.
+    pub fn columns(&self) -> Vec<String> {
+        let mut c = vec!["time_s".to_string(), "t_chamber_c".to_string()];
+        c.extend(self.thermometers.iter().map(|t| t.name.clone()));
+        c.push("supply_v".into());
+        c.push(self.sensor.output_column().into());
+        c.push(self.sensor.reference_column().into());
+        c
+    }
+
+    pub(crate) fn context(&self) -> (Vec<String>, &'static str) {
+        (
+            self.thermometers.iter().map(|t| t.name.clone()).collect(),
+            self.sensor.unit(),
+        )
+    }
+
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<()> {
+        let pos = |v: f64, f: &str| -> Result<()> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid(f, format!("must be > 0, got {v}")))
+            }
+        };
+        pos(self.rate_hz, "rate_hz")?;
+        pos(self.step_s, "step_s")?;
+        let k = self.step_s * self.rate_hz;
+        if k < 1.0 - 1e-9 || (k - k.round()).abs() > 1e-6 * k.max(1.0) {
+            return Err(Error::invalid(
+                "step_s",
+                format!(
+                    "must be a whole multiple of the sample period 1/rate_hz = {} s, got {}",
+                    1.0 / self.rate_hz,
+                    self.step_s
+                ),
+            ));
+        }
+        if !self.reference.is_finite() {
+            return Err(Error::invalid("sensor.reference", "must be finite"));
+        }
+        self.profile.validate("profile")?;
+        if self.profile.duration_s() < self.step_s {
+            return Err(Error::invalid(
+                "profile.segments",
+                "the profile is shorter than one output step",
+            ));
+        }
+        let expect: Vec<String> = self
+            .sensor
+            .default_thermometers()
+            .into_iter()
+            .map(|t| t.name)
+            .collect();
+        let got: Vec<String> = self.thermometers.iter().map(|t| t.name.clone()).collect();
+        if got != expect {
+            return Err(Error::invalid(
+                "sensor.thermal",
+                format!(
+                    "sensor {} has thermometers {}, got {}",
+                    self.sensor.name(),
+                    expect.join(", "),
+                    got.join(", ")
+                ),
+            ));
+        }
+        for t in &self.thermometers {
+            t.validate(&format!("sensor.thermal.{}", t.name))?;
+        }
+        self.noise.validate("noise")?;
+        let s = &self.supply;
+        if !s.nominal_v.is_finite() {
+            return Err(Error::invalid("supply.nominal_v", "must be finite"));
+        }
+        if !(s.wander_v.is_finite() && s.wander_v >= 0.0) {
+            return Err(Error::invalid("supply.wander_v", "must be >= 0"));
+        }
+        pos(s.wander_tau_s, "supply.wander_tau_s")?;
+        if !(s.noise_v.is_finite() && s.noise_v >= 0.0) {
+            return Err(Error::invalid("supply.noise_v", "must be >= 0"));
+        }
+        let (names, unit) = self.context();
+        let ctx = Context {
+            sensor: self.sensor,
+            therm_names: &names,
+            unit,
+        };
+        for (i, e) in self.effects.iter().enumerate() {
+            e.validate(&ctx, &format!("effects[{i}]"))?;
+        }
+        Ok(())
+    }
+
+    /// Parses and validates a scenario from TOML (the training run if the file also has a
+    /// `verify_profile`). See the module documentation for the format.
+    pub fn from_toml_str(text: &str) -> Result<Scenario> {
+        Ok(parse_toml(text)?.0)
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenarioToml {
+    name: Option<String>,
+    description: Option<String>,
+    seed: Option<u64>,
+    rate_hz: Option<f64>,
+    step_s: Option<f64>,
+    sensor: SensorToml,
+    noise: Option<NoiseToml>,
+    supply: Option<SupplySpec>,
+    profile: Option<ProfileToml>,
+    verify_profile: Option<ProfileToml>,
+    #[serde(default)]
+    effects: Vec<toml::Table>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SensorToml {
+    kind: String,
+    reference: Option<f64>,
+    #[serde(default)]
+    thermal: BTreeMap<String, ThermalToml>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ThermalToml {
+    tau_s: Option<f64>,
+    self_heating_c: Option<f64>,
+    self_heating_tau_s: Option<f64>,
+    noise_c: Option<f64>,
+    lsb_c: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NoiseToml {
+    arw_deg_per_sqrt_h: Option<f64>,
+    vrw_ug_per_sqrt_hz: Option<f64>,
+    white_density: Option<f64>,
+    bias_instability: Option<f64>,
+    correlation_s: Option<f64>,
+    pulse_weight: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfileToml {
+    start_c: Option<f64>,
+    segments: Option<Vec<Segment>>,
+    random: Option<RandomProfile>,
+}
+
+impl ProfileToml {
+    fn build(self, at: &str) -> Result<Profile> {
+        match (self.random, self.segments) {
+            (Some(_), Some(_)) => Err(Error::invalid(
+                format!("{at}.random"),
+                "give either segments or random, not both",
+            )),
+            (Some(r), None) => {
+                if self.start_c.is_some() {
+                    return Err(Error::invalid(
+                        format!("{at}.start_c"),
+                        "a random profile takes its start from random.start_c",
+                    ));
+                }
+                Profile::random(&r).map_err(|e| match e {
+                    Error::Invalid { field, message } => Error::Invalid {
+                        field: field.replacen("profile", at, 1),
+                        message,
+                    },
+                    other => other,
+                })
+            }
+            (None, segments) => {
+                let start_c = self.start_c.ok_or_else(|| {
+                    Error::invalid(format!("{at}.start_c"), "missing start temperature")
+                })?;
+                let p = Profile::new(start_c, segments.unwrap_or_default());
+                p.validate(at)?;
+                Ok(p)
+            }
+        }
+    }
+}
+
+/// Parses a scenario file: the training scenario and, if given, the verification profile.
+pub(crate) fn parse_toml(text: &str) -> Result<(Scenario, Option<Profile>)> {
+    let raw: ScenarioToml = toml::from_str(text).map_err(|e| Error::Toml(e.to_string()))?;
+    let sensor = SensorKind::from_name(&raw.sensor.kind).ok_or_else(|| {
+        Error::invalid(
+            "sensor.kind",
+            format!(
+                "unknown sensor \"{}\" (known: rlg, qma, ifog)",
+                raw.sensor.kind
+            ),
+        )
+    })?;
+    let profile = raw
+        .profile
+        .ok_or_else(|| Error::invalid("profile", "missing: the chamber profile is required"))?
+        .build("profile")?;
+    let verify = raw
+        .verify_profile
+        .map(|p| p.build("verify_profile"))
+        .transpose()?;
+    let mut sc = Scenario::new(sensor, profile);
+    if let Some(n) = raw.name {
+        sc.name = n;
+    }
+    if let Some(d) = raw.description {
+        sc.description = d;
+    }
+    if let Some(s) = raw.seed {
+        sc.seed = s;
+    }
+    if let Some(r) = raw.rate_hz {
+        sc.rate_hz = r;
+    }
+    sc.step_s = raw.step_s.unwrap_or(1.0f64.max(1.0 / sc.rate_hz));
+    if let Some(r) = raw.sensor.reference {
+        sc.reference = r;
+    }
+    for (name, t) in raw.sensor.thermal {
+        let known: Vec<String> = sc.thermometers.iter().map(|t| t.name.clone()).collect();
+        let Some(spec) = sc.thermometers.iter_mut().find(|s| s.name == name) else {
+            return Err(Error::invalid(
+                format!("sensor.thermal.{name}"),
+                format!(
+                    "sensor {} has no thermometer \"{name}\" (known: {})",
+                    sensor.name(),
+                    known.join(", ")
+                ),
+            ));
+        };
+        if let Some(v) = t.tau_s {
+            spec.tau_s = v;
+        }
+        if let Some(v) = t.self_heating_c {
+            spec.self_heating_c = v;
+        }
+        if let Some(v) = t.self_heating_tau_s {
+            spec.self_heating_tau_s = v;
+        }
+        if let Some(v) = t.noise_c {
+            spec.noise_c = v;
+        }
+        if let Some(v) = t.lsb_c {
+            spec.lsb_c = v;
+        }
+    }
+    if let Some(n) = raw.noise {
+        let gyro = sensor != SensorKind::Qma;
+        if n.arw_deg_per_sqrt_h.is_some() && !gyro {
+            return Err(Error::invalid(
+                "noise.arw_deg_per_sqrt_h",
+                "angle random walk is for gyros; use vrw_ug_per_sqrt_hz for the QMA",
+            ));
+        }
+        if n.vrw_ug_per_sqrt_hz.is_some() && gyro {
+            return Err(Error::invalid(
+                "noise.vrw_ug_per_sqrt_hz",
+                "velocity random walk is for accelerometers; use arw_deg_per_sqrt_h for gyros",
+            ));
+        }
+        if let Some(v) = n.arw_deg_per_sqrt_h {
+            sc.noise.white_density = 60.0 * v;
+        }
+        if let Some(v) = n.vrw_ug_per_sqrt_hz {
+            sc.noise.white_density = v;
+        }
+        if let Some(v) = n.white_density {
+            sc.noise.white_density = v;
+        }
+        if let Some(v) = n.bias_instability {
+            sc.noise.bias_instability = v;
+        }
+        if let Some(v) = n.correlation_s {
+            sc.noise.correlation_s = v;
+        }
+        if let Some(v) = n.pulse_weight {
+            sc.noise.pulse_weight = v;
+        }
+    }
+    if let Some(s) = raw.supply {
+        sc.supply = s;
+    }
+    for (i, table) in raw.effects.into_iter().enumerate() {
+        let at = format!("effects[{i}]");
+        let name = match table.get("name") {
+            Some(toml::Value::String(s)) => s.clone(),
+            Some(_) => return Err(Error::invalid(format!("{at}.name"), "must be a string")),
+            None => {
+                return Err(Error::invalid(
+                    format!("{at}.name"),
+                    format!("missing (known: {})", EffectKind::known()),
+                ));
+            }
+        };
+        if EffectKind::from_name(&name).is_none() {
+            return Err(Error::invalid(
+                format!("{at}.name"),
+                format!("unknown effect \"{name}\" (known: {})", EffectKind::known()),
+            ));
+        }
+        let effect: Effect = table
+            .try_into()
+            .map_err(|e: toml::de::Error| Error::invalid(at.clone(), e.message().to_string()))?;
+        sc.effects.push(effect);
+    }
+    sc.validate()?;
+    Ok((sc, verify))
+}

@@ -1,0 +1,154 @@
+//! The truth file: what was simulated, and the noise floor actually drawn.
+//!
+//! Why: downstream tools (fit, diagnose, demo, tests) need to know which effects are in a file, in
+//! the core's expression language, and how low a residual can possibly go. Serialised as JSON
+//! beside the CSV.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::effects::EffectTruth;
+use crate::noise::NoiseSpec;
+use crate::profile::ResolvedSegment;
+use crate::scenario::SensorKind;
+use crate::thermal::ThermometerSpec;
+
+/// Roles of the file's columns.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Columns {
+    /// Time column (`time_s`).
+    pub time: String,
+    /// Sensor output (`gyro_dph` or `accel_ug`).
+    pub target: String,
+    /// Reference column (`ref_dph` or `ref_ug`); error = target − reference.
+    pub reference: String,
+    /// Thermometer columns of the sensor.
+    pub thermometers: Vec<String>,
+    /// Chamber air temperature (`t_chamber_c`); not a sensor thermometer.
+    pub chamber: String,
+    /// Non-thermal inputs (`supply_v`).
+    pub inputs: Vec<String>,
+    /// Every column, in file order.
+    pub all: Vec<String>,
+}
+
+/// The chamber profile as run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProfileTruth {
+    /// Start temperature, °C.
+    pub start_c: f64,
+    /// Duration, s.
+    pub duration_s: f64,
+    /// Segments with absolute times.
+    pub segments: Vec<ResolvedSegment>,
+}
+
+/// The minimal features a model needs to represent the whole bias.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrueFeatures {
+    /// Named signals used by the features (`NAME = expr`), e.g. the RLG's `T`.
+    pub signals: BTreeMap<String, String>,
+    /// Feature expressions.
+    pub features: Vec<String>,
+}
+
+/// The noise drawn, in output units.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NoiseTruth {
+    /// Std of the drawn white noise at the output step.
+    pub white_std_raw: f64,
+    /// Std of the total drawn noise (white + bias instability + quantisation) at the output step.
+    pub std_raw: f64,
+    /// Std of the total drawn noise averaged over complete non-overlapping 100 s bins from the first
+    /// sample.
+    pub std_100s: f64,
+    /// The same over 1000 s bins.
+    pub std_1000s: f64,
+    /// Number of complete 100 s bins.
+    pub bins_100s: u64,
+    /// Number of complete 1000 s bins.
+    pub bins_1000s: u64,
+    /// Mean of the drawn noise (bias-instability offset), output units.
+    pub mean: f64,
+    /// Std of the drawn Gauss–Markov bias instability at the output step.
+    pub bias_instability_std: f64,
+    /// Std of the quantisation error at the output step.
+    pub quantisation_std: f64,
+    /// Expected white std at the output step, from the specification.
+    pub expected_white_std_raw: f64,
+    /// Expected quantisation std at the output step, from the specification.
+    pub expected_quantisation_std: f64,
+    /// The specification.
+    pub spec: NoiseSpec,
+    /// Specification in the sensor's customary units (ARW °/√h or VRW µg/√Hz, BI, pulse weight).
+    pub spec_customary: BTreeMap<String, f64>,
+}
+
+/// Everything known about one simulated run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Truth {
+    /// Scenario name.
+    pub scenario: String,
+    /// Scenario description.
+    pub description: String,
+    /// Sensor kind.
+    pub sensor: SensorKind,
+    /// Output unit (`deg/h` or `ug`).
+    pub unit: String,
+    /// Seed.
+    pub seed: u64,
+    /// Internal sensor rate, Hz.
+    pub rate_hz: f64,
+    /// Output step, s.
+    pub step_s: f64,
+    /// Data rows in the file.
+    pub rows: u64,
+    /// Constant reference value, output units.
+    pub reference_value: f64,
+    /// Column roles.
+    pub columns: Columns,
+    /// Chamber profile.
+    pub profile: ProfileTruth,
+    /// Thermometer physics.
+    pub thermal: Vec<ThermometerSpec>,
+    /// Effects; the bias is the sum of their contributions.
+    pub effects: Vec<EffectTruth>,
+    /// Signals the effects' expressions use.
+    pub signals: BTreeMap<String, String>,
+    /// The minimal feature set.
+    pub true_features: TrueFeatures,
+    /// Std of the total bias over the run.
+    pub bias_std: f64,
+    /// Peak-to-peak of the total bias over the run.
+    pub bias_p2p: f64,
+    /// Noise drawn.
+    pub noise: NoiseTruth,
+    /// Discrete-time definitions of the operators the expressions were evaluated with.
+    pub operators: BTreeMap<String, String>,
+    /// How the effects relate to the columns.
+    pub notes: Vec<String>,
+}
+
+/// The truth file of a preset or scenario file: shared facts plus one [`Truth`] per run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TruthFile {
+    /// Preset or scenario name.
+    pub name: String,
+    /// Description.
+    pub description: String,
+    /// Sensor kind.
+    pub sensor: SensorKind,
+    /// Column roles (same in both files).
+    pub columns: Columns,
+    /// Effects of the training run (same coefficients in both).
+    pub effects: Vec<EffectTruth>,
+    /// The minimal feature set.
+    pub true_features: TrueFeatures,
+    /// File names: `train`, `verify`.
+    pub files: BTreeMap<String, String>,
+    /// The training run.
+    pub train: Truth,
+    /// The verification run.
+    pub verify: Truth,
+}
