@@ -404,9 +404,9 @@ impl Effect {
     pub fn default_for(kind: EffectKind, sensor: SensorKind) -> Effect {
         // Scale: °/h for the gyros, µg for the QMA.
         let (poly, rate, shupe, lagc, hyst, warm, supply) = match sensor {
-            SensorKind::Rlg => (vec![0.004, 5e-5, 1e-6], 0.05, 0.004, 0.005, 0.08, 0.3, 0.2),
-            SensorKind::Qma => (vec![15.0, 0.2, 0.005], 40.0, 1.5, 8.0, 50.0, 200.0, 200.0),
-            SensorKind::Ifog => (vec![0.005, 1e-4, 2e-6], 0.1, 0.01, 0.008, 0.1, 0.4, 0.3),
+            SensorKind::Rlg => (vec![0.004, 5e-5, 1e-6], 0.15, 0.006, 0.005, 0.08, 0.5, 0.2),
+            SensorKind::Qma => (vec![15.0, 0.2, 0.005], 60.0, 3.0, 8.0, 50.0, 200.0, 200.0),
+            SensorKind::Ifog => (vec![0.01, 2e-4, 4e-6], 0.3, 0.02, 0.008, 0.1, 0.6, 0.3),
         };
         let input = default_input();
         match kind {
@@ -421,8 +421,8 @@ impl Effect {
                 input,
             },
             EffectKind::Gradient => Effect::Gradient {
-                anode_shell: 0.05,
-                cathode_shell: -0.03,
+                anode_shell: 0.25,
+                cathode_shell: -0.15,
             },
             EffectKind::Shupe => Effect::Shupe {
                 coefficient: shupe,
