@@ -1,5 +1,5 @@
 //! Physics checks of the simulator: lags, self-heating, ramp rates, noise levels, seeds.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use std::collections::BTreeMap;
 

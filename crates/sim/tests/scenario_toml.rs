@@ -1,5 +1,5 @@
 //! TOML scenarios: the shipped example parses; bad input names the field.
-#![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use tcomp_sim::{EffectKind, Error, Preset, Scenario, SensorKind, simulate};
 
