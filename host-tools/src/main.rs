@@ -18,11 +18,14 @@ struct Cli {
 enum Command {
     /// Print the contents of a model blob; a corrupt blob is named as such, with the reason.
     Inspect(cmd::inspect::Args),
+    /// Simulate temperature-chamber runs with known physics: train.csv, verify.csv and truth.json.
+    Simulate(cmd::simulate::Args),
 }
 
 fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Inspect(args) => cmd::inspect::run(&args),
+        Command::Simulate(args) => cmd::simulate::run(&args),
     }
 }
