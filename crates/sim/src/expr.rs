@@ -7,7 +7,7 @@
 //!
 //! Grammar: `expr := term (('+'|'-') term)*`, `term := unary (('*'|'/') unary)*`,
 //! `unary := '-' unary | primary`, `primary := number | name | name '(' args ')' | '(' expr ')'`;
-//! functions `sq(x)`, `mean(a, ...)`, `rate(x[, window_s])`, `lag(x, tau_s)`, `hyst(x, th)`,
+//! functions `sq(x)`, `abs(x)`, `mean(a, ...)`, `rate(x[, window_s])`, `lag(x, tau_s)`, `hyst(x, th)`,
 //! `clamp(x, lo, hi)`; names are columns or signals.
 
 use std::collections::BTreeMap;
@@ -23,6 +23,7 @@ enum Node {
     Neg(Box<Node>),
     Bin(char, Box<Node>, Box<Node>),
     Sq(Box<Node>),
+    Abs(Box<Node>),
     Mean(Vec<Node>),
     Clamp(Box<Node>, Box<Node>, Box<Node>),
     Rate(Box<Node>, Rate),
@@ -49,6 +50,7 @@ impl Node {
                 let x = a.eval(row, dt);
                 x * x
             }
+            Node::Abs(a) => a.eval(row, dt).abs(),
             Node::Mean(args) => {
                 let n = args.len().max(1) as f64;
                 args.iter_mut().map(|a| a.eval(row, dt)).sum::<f64>() / n
@@ -209,6 +211,7 @@ impl Parser<'_> {
         let one = |args: Vec<Node>| args.into_iter().next().map(Box::new);
         let node = match (name, args.len(), consts.as_slice()) {
             ("sq", 1, []) => one(args).map(Node::Sq),
+            ("abs", 1, []) => one(args).map(Node::Abs),
             ("mean", _, []) => Some(Node::Mean(args)),
             ("clamp", 3, []) => {
                 let mut it = args.into_iter().map(Box::new);

@@ -4,12 +4,13 @@
 //! evaluated over the file's columns. The simulator therefore computes every effect from the recorded
 //! columns with these operators, sample by sample at the file's step, exactly as the core's feature
 //! programs do. This is a private mirror so the simulator does not depend on the core yet; the
-//! definitions below are the contract and must stay identical to the core's:
+//! definitions below are the contract and are those documented in `tcomp-core`'s `program` module
+//! (evaluated here in f64 rather than f32):
 //!
 //! - `lag(x, tau)`: `L[0] = x[0]`, `L[n] = L[n-1] + (1 - exp(-dt/tau)) * (x[n] - L[n-1])`.
-//! - `rate(x, w)` (units per minute, `w` defaults to 60 s): `L = lag(x, w)`,
-//!   `rate[0] = 0`, `rate[n] = 60 * (L[n] - L[n-1]) / dt`. A ramp of slope `s` per minute gives exactly
-//!   `s` once the lag's transient has decayed.
+//! - `rate(x, w)` (units per minute, `w` defaults to 60 s): two cascaded lags with `τ = w/2`,
+//!   `L1 = lag(x, τ)`, `L2 = lag(L1, τ)`, `rate[n] = 60·(L1[n] − L2[n])·(e^(dt/τ) − 1)/dt`,
+//!   `rate[0] = 0`. A ramp of slope `s` per minute gives exactly `s` once the transient has decayed.
 //! - `hyst(x, th)`: state `0` at start; `+1` when `x > th`, `-1` when `x < -th`, otherwise held.
 //!
 //! `dt` is the sample period of the file (its step).
@@ -26,7 +27,7 @@ pub fn definitions() -> Vec<(String, String)> {
         ),
         (
             "rate(x, window_s = 60)",
-            "L = lag(x, window_s); rate[0] = 0; rate[n] = 60 * (L[n] - L[n-1]) / dt  (units per minute)",
+            "tau = window_s/2; L1 = lag(x, tau); L2 = lag(L1, tau); rate[0] = 0; rate[n] = 60 * (L1[n] - L2[n]) * (exp(dt/tau) - 1) / dt  (units per minute)",
         ),
         (
             "hyst(x, th)",
@@ -34,6 +35,7 @@ pub fn definitions() -> Vec<(String, String)> {
         ),
         ("mean(a, b, ...)", "arithmetic mean of the arguments"),
         ("sq(x)", "x * x"),
+        ("abs(x)", "|x|"),
         ("clamp(x, lo, hi)", "min(max(x, lo), hi)"),
     ]
     .into_iter()
@@ -65,31 +67,45 @@ impl Lag {
     }
 }
 
-/// Rate of change in units per minute, as the core defines it (derivative of a lag).
+/// Rate of change in units per minute, as the core defines it: two cascaded lags with
+/// `τ = window/2` (`L1` of `x`, `L2` of `L1`) and `rate = 60·(L1 − L2)·(e^(dt/τ) − 1)/dt`, kept in
+/// difference form (`e1 = x − L1`, `e2 = L1 − L2`) like the core. `rate[0] = 0`.
 #[derive(Debug, Clone)]
 pub struct Rate {
-    lag: Lag,
+    tau_s: f64,
     prev: Option<f64>,
+    e1: f64,
+    e2: f64,
 }
 
 impl Rate {
-    /// A rate estimator with the given window (the time constant of its smoothing lag).
+    /// A rate estimator with the given window in seconds.
     pub fn new(window_s: f64) -> Self {
         Rate {
-            lag: Lag::new(window_s),
+            tau_s: 0.5 * window_s,
             prev: None,
+            e1: 0.0,
+            e2: 0.0,
         }
     }
 
     /// Feeds `x` after a sample period of `dt` seconds; returns the rate per minute.
     pub fn step(&mut self, x: f64, dt: f64) -> f64 {
-        let l = self.lag.step(x, dt);
-        let r = match self.prev {
-            None => 0.0,
-            Some(p) => 60.0 * (l - p) / dt,
+        let Some(prev) = self.prev else {
+            self.prev = Some(x);
+            self.e1 = 0.0;
+            self.e2 = 0.0;
+            return 0.0;
         };
-        self.prev = Some(l);
-        r
+        let h = dt / self.tau_s;
+        let decay = (-h).exp();
+        let dx = x - prev;
+        let e1 = (self.e1 + dx) * decay;
+        let dl1 = dx - (e1 - self.e1);
+        self.e2 = (self.e2 + dl1) * decay;
+        self.e1 = e1;
+        self.prev = Some(x);
+        self.e2 * 60.0 * h.exp_m1() / dt
     }
 }
 
