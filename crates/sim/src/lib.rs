@@ -88,6 +88,8 @@ pub fn write_preset(preset: &Preset, dir: &Path, gzip: bool) -> Result<TruthFile
         columns: train.columns.clone(),
         effects: train.effects.clone(),
         true_features: train.true_features.clone(),
+        profile: train.profile.clone(),
+        noise: train.noise.clone(),
         files: BTreeMap::from([
             ("train".to_string(), train_name),
             ("verify".to_string(), verify_name),

@@ -145,6 +145,10 @@ pub struct TruthFile {
     pub effects: Vec<EffectTruth>,
     /// The minimal feature set.
     pub true_features: TrueFeatures,
+    /// Chamber profile of the training run (the verification run's is `verify.profile`).
+    pub profile: ProfileTruth,
+    /// Noise drawn in the training run (compare held-out residuals with `verify.noise`).
+    pub noise: NoiseTruth,
     /// File names: `train`, `verify`.
     pub files: BTreeMap<String, String>,
     /// The training run.
