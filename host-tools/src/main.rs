@@ -18,6 +18,10 @@ struct Cli {
 enum Command {
     /// Print the contents of a model blob; a corrupt blob is named as such, with the reason.
     Inspect(cmd::inspect::Args),
+    /// Train a compensation model from a chamber run and write its blob.
+    Fit(Box<cmd::fit::Args>),
+    /// Measure a model on a run (through the core's f32 evaluator).
+    Eval(cmd::eval::Args),
     /// Simulate temperature-chamber runs with known physics: train.csv, verify.csv and truth.json.
     Simulate(cmd::simulate::Args),
 }
@@ -26,6 +30,8 @@ fn main() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Inspect(args) => cmd::inspect::run(&args),
+        Command::Fit(args) => cmd::fit::run(&args),
+        Command::Eval(args) => cmd::eval::run(&args),
         Command::Simulate(args) => cmd::simulate::run(&args),
     }
 }

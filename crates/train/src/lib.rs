@@ -1,1 +1,37 @@
-//! Host-side training of compensation models (filled by the trainer issue).
+//! Host-side training of temperature-compensation models for inertial sensors.
+//!
+//! The pipeline: [`dataset`] loads a measurement CSV with precise errors; [`features`] runs the
+//! core's feature program over it (the code the firmware runs); a method fits an RBF in f64 —
+//! [`bayes`] (default, MacKay evidence), [`mse`], [`gradient`] or the [`poly3`] baseline; [`blob_io`]
+//! stores it as the core's blob; [`metrics`] measures it by running the decoded blob through the
+//! core's f32 `Channel`. [`train::fit`] ties it together for `tcomp fit`; [`spec`] reads the TOML spec.
+//!
+//! ```no_run
+//! use tcomp_train::{Dataset, FitOptions, fit};
+//! let data = Dataset::load(std::path::Path::new("run.csv")).unwrap();
+//! let mut opts = FitOptions::new("gyro_dph", &["T", "rate(T)"]);
+//! opts.spec.signals.push("T = mean(t_anode_c, t_shell_c)".into());
+//! opts.reference = Some("ref_dph".into());
+//! let fitted = fit(&data, &opts).unwrap();
+//! println!("{}", fitted.summary.train.residual_std);
+//! ```
+
+pub mod bayes;
+pub mod blob_io;
+pub mod dataset;
+pub mod error;
+pub mod features;
+pub mod gradient;
+pub mod kmeans;
+pub mod metrics;
+pub mod mse;
+pub mod poly3;
+pub mod rbf64;
+pub mod spec;
+pub mod train;
+
+pub use dataset::{DataError, Dataset};
+pub use error::TrainError;
+pub use metrics::{EvalReport, Roles};
+pub use spec::Spec;
+pub use train::{FitOptions, FitSummary, Fitted, Method, evaluate, fit};

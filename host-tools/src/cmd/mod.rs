@@ -1,4 +1,7 @@
 //! One module per subcommand.
 
+pub mod eval;
+pub mod fit;
 pub mod inspect;
+mod progress;
 pub mod simulate;

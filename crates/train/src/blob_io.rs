@@ -1,0 +1,134 @@
+//! An owned model description → the core's borrowed [`Model`] → bytes on disk, written atomically.
+//!
+//! Why: the core's `Model<'a>` borrows its strings (zero-copy on the firmware), so the host keeps an
+//! owned [`OwnedModel`] and lends it out. Files are written to a temporary file in the same directory
+//! and renamed over the target, so a crash or a full disk never leaves a half-written blob.
+
+use crate::error::TrainError;
+use crate::features::{F, FeatureSpec, N};
+use crate::rbf64::C;
+use std::io::Write;
+use std::path::Path;
+use tcomp_core::{ColumnRoles, FeatureRange, Meta, Model, Rbf, ResidualLevel, SensorKind};
+
+/// Largest blob the host writes.
+pub const MAX_BLOB: usize = 64 * 1024;
+
+/// Everything a model blob holds, owned.
+#[derive(Clone, Debug)]
+pub struct OwnedModel {
+    /// Instrument kind.
+    pub sensor: SensorKind,
+    /// Axis label.
+    pub axis: String,
+    /// Target unit.
+    pub unit: String,
+    /// Method name.
+    pub method: String,
+    /// Time column.
+    pub time: String,
+    /// Target column.
+    pub target: String,
+    /// Reference column ("" when a constant).
+    pub reference: String,
+    /// Constant reference.
+    pub reference_value: Option<f32>,
+    /// What it was trained on.
+    pub trained_on: String,
+    /// Training samples (after averaging).
+    pub train_samples: u32,
+    /// The feature program's source.
+    pub spec: FeatureSpec,
+    /// Valid feature ranges.
+    pub ranges: Vec<FeatureRange>,
+    /// Coefficients.
+    pub rbf: Rbf<C, F>,
+    /// Residual level.
+    pub residual: ResidualLevel,
+}
+
+impl OwnedModel {
+    /// The core model, borrowing from `self`.
+    pub fn model(&self) -> Result<Model<'_, C, F, N>, TrainError> {
+        let program = self.spec.program()?;
+        let mut ranges = heapless::Vec::new();
+        for r in &self.ranges {
+            ranges
+                .push(*r)
+                .map_err(|_| TrainError::Invalid("too many feature ranges".into()))?;
+        }
+        let meta = Meta {
+            sensor: self.sensor,
+            axis: &self.axis,
+            unit: &self.unit,
+            method: &self.method,
+            columns: ColumnRoles {
+                time: &self.time,
+                target: &self.target,
+                reference: &self.reference,
+                reference_value: self.reference_value,
+            },
+            trained_on: &self.trained_on,
+            train_samples: self.train_samples,
+        };
+        Ok(Model::new(
+            meta,
+            program,
+            ranges,
+            self.rbf.clone(),
+            self.residual,
+        ))
+    }
+
+    /// The encoded blob.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, TrainError> {
+        let model = self.model()?;
+        let mut buf = vec![0u8; MAX_BLOB];
+        let len = model
+            .encode(&mut buf)
+            .map_err(|e| TrainError::Blob(format!("cannot encode the model: {e}")))?;
+        buf.truncate(len);
+        Ok(buf)
+    }
+}
+
+/// Writes `bytes` to `path` atomically (temporary file in the same directory, then rename).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
+    let io = |source| TrainError::Io {
+        file: path.display().to_string(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "model".into());
+    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(io)
+}
+
+/// Reads a blob file's bytes (decode them with [`Model::decode`]).
+pub fn read(path: &Path) -> Result<Vec<u8>, TrainError> {
+    std::fs::read(path).map_err(|source| TrainError::Io {
+        file: path.display().to_string(),
+        source,
+    })
+}
+
+/// Decodes a blob, naming the file and the reason when it is rejected.
+pub fn decode<'a>(path: &Path, bytes: &'a [u8]) -> Result<Model<'a, C, F, N>, TrainError> {
+    Model::decode(bytes)
+        .map_err(|e| TrainError::Blob(format!("{}: corrupt model blob: {e}", path.display())))
+}

@@ -1,0 +1,157 @@
+//! Training features computed by the core's own feature program, exactly as the firmware does.
+//!
+//! Why: a second implementation of `rate`, `lag` or `hyst` on the host would train a model on
+//! numbers the IMU never sees. Here the user's expressions are compiled by `tcomp_core`'s
+//! [`ProgramBuilder`] and stepped sample by sample in f32 by its [`ProgramState`], with the state
+//! reset at every gap in the record (so a rate never spans a gap). Averaging into non-overlapping bins
+//! (the `--average` option) happens afterwards, on these features.
+
+use crate::dataset::Dataset;
+use crate::error::TrainError;
+use serde::{Deserialize, Serialize};
+use tcomp_core::{HOST_FEATURES, HOST_NODES, Program, ProgramBuilder, ProgramState};
+
+/// Features per model on the host.
+pub const F: usize = HOST_FEATURES;
+/// Program nodes on the host.
+pub const N: usize = HOST_NODES;
+
+/// The source of a feature program: named signals (`NAME = EXPR`) and feature expressions.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct FeatureSpec {
+    /// Signal definitions, each `NAME = EXPR`, in order.
+    #[serde(default)]
+    pub signals: Vec<String>,
+    /// Feature expressions.
+    #[serde(default)]
+    pub features: Vec<String>,
+}
+
+impl FeatureSpec {
+    /// Compiles the program (it borrows the strings of `self`).
+    pub fn program(&self) -> Result<Program<'_, N, F>, TrainError> {
+        let mut b = ProgramBuilder::<N, F>::new();
+        for s in &self.signals {
+            if !s.contains('=') {
+                return Err(TrainError::Expr {
+                    expr: s.clone(),
+                    message: "a signal must be written NAME=EXPR".into(),
+                });
+            }
+            b.line(s).map_err(|e| expr_error(s, &e))?;
+        }
+        if self.features.is_empty() {
+            return Err(TrainError::Invalid(
+                "no features: give at least one --feature EXPR".into(),
+            ));
+        }
+        for f in &self.features {
+            b.feature(f).map_err(|e| expr_error(f, &e))?;
+        }
+        b.finish()
+            .map_err(|e| TrainError::Invalid(format!("feature program: {e}")))
+    }
+}
+
+fn expr_error(expr: &str, e: &tcomp_core::ParseError) -> TrainError {
+    let col = e.column();
+    TrainError::Expr {
+        expr: expr.to_string(),
+        message: format!(
+            "{e}\n    {expr}\n    {}^",
+            " ".repeat(col.saturating_sub(1))
+        ),
+    }
+}
+
+/// Input columns of a program, as f64 slices of the dataset (in program input order).
+pub fn input_columns<'d>(
+    program: &Program<'_, N, F>,
+    data: &'d Dataset,
+) -> Result<Vec<&'d [f64]>, TrainError> {
+    program
+        .inputs
+        .iter()
+        .map(|name| data.column(name).map_err(TrainError::from))
+        .collect()
+}
+
+/// Runs `program` over every row of `data` (f32, the core's code), resetting at each entry of
+/// `segment_starts`; returns one feature vector per row.
+pub fn compute(
+    program: &Program<'_, N, F>,
+    data: &Dataset,
+    time: &[f64],
+    segment_starts: &[usize],
+) -> Result<Vec<[f32; F]>, TrainError> {
+    let cols = input_columns(program, data)?;
+    let mut state = ProgramState::<N>::new();
+    let mut inputs = vec![0.0f32; cols.len()];
+    let mut out = Vec::with_capacity(time.len());
+    let mut next_seg = segment_starts.iter().peekable();
+    for i in 0..time.len() {
+        if next_seg.peek().is_some_and(|&&s| s == i) {
+            next_seg.next();
+            state.reset();
+        }
+        for (v, c) in inputs.iter_mut().zip(&cols) {
+            *v = c.get(i).copied().unwrap_or(f64::NAN) as f32;
+        }
+        let dt = if i == 0 {
+            1.0
+        } else {
+            (time.get(i).copied().unwrap_or(0.0) - time.get(i - 1).copied().unwrap_or(0.0)) as f32
+        };
+        let mut x = [0.0f32; F];
+        state
+            .step(program, &inputs, dt)
+            .and_then(|()| state.features(program, &mut x))
+            .map_err(|e| TrainError::Step {
+                at: format!("{}:{}", data.file(), data.line(i)),
+                message: e.to_string(),
+            })?;
+        out.push(x);
+    }
+    Ok(out)
+}
+
+/// Non-overlapping bins of `bin_s` seconds starting at the first sample: for each bin that holds at
+/// least half the samples a full bin would, its row range `[start, end)`. With `bin_s <= 0` every
+/// row is its own bin.
+pub fn bins(time: &[f64], bin_s: f64) -> Vec<(usize, usize)> {
+    let Some(&t0) = time.first() else {
+        return Vec::new();
+    };
+    if bin_s <= 0.0 {
+        return (0..time.len()).map(|i| (i, i + 1)).collect();
+    }
+    let step = crate::dataset::median_step(time);
+    let need = ((bin_s / step) * 0.5).floor().max(1.0) as usize;
+    let mut out = Vec::new();
+    let mut start = 0;
+    let mut cur = 0i64;
+    for (i, &t) in time.iter().enumerate() {
+        let b = ((t - t0) / bin_s).floor() as i64;
+        if b != cur {
+            if i - start >= need {
+                out.push((start, i));
+            }
+            start = i;
+            cur = b;
+        }
+    }
+    if time.len() - start >= need {
+        out.push((start, time.len()));
+    }
+    out
+}
+
+/// Mean of `v` over each bin.
+pub fn bin_mean(v: &[f64], bins: &[(usize, usize)]) -> Vec<f64> {
+    bins.iter()
+        .map(|&(a, b)| {
+            let s = v.get(a..b).unwrap_or(&[]);
+            s.iter().sum::<f64>() / s.len().max(1) as f64
+        })
+        .collect()
+}

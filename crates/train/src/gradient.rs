@@ -1,0 +1,111 @@
+//! RBF trained by gradient descent on the squared error, with the IFOG paper's update rules for the
+//! weights W, the centers c and the widths σ.
+//!
+//! Why: it is the second seed paper's method. It starts from the `mse` solution (k-means centers,
+//! heuristic width, least-squares weights) and descends on `E = ½·mean((y − f)²)` with, for
+//! `φ_j = exp(−‖z − c_j‖²/(2σ_j²))` and error `e = y − f`:
+//! `Δw_j = η_w·mean(e·φ_j)`, `Δc_j = η_c·mean(e·w_j·φ_j·(z − c_j)/σ_j²)`,
+//! `Δσ_j = η_σ·mean(e·w_j·φ_j·‖z − c_j‖²/σ_j³)`, bias with `η_w`. Iterations are bounded; a step that
+//! increases the error halves the learning rates (so it cannot diverge).
+
+use crate::error::TrainError;
+use crate::rbf64::Rbf64;
+
+/// Fits by gradient descent from the `mse` starting point; `iterations` full-batch steps at most.
+pub fn fit(
+    x: &[Vec<f64>],
+    y: &[f64],
+    m: usize,
+    seed: u64,
+    iterations: usize,
+) -> Result<Rbf64, TrainError> {
+    let mut rbf = crate::mse::fit(x, y, m, seed)?;
+    let z: Vec<Vec<f64>> = x.iter().map(|r| rbf.normalise(r)).collect();
+    let n = z.len().max(1) as f64;
+    let ym = y.iter().sum::<f64>() / n;
+    let ys = (y.iter().map(|v| (v - ym) * (v - ym)).sum::<f64>() / n)
+        .sqrt()
+        .max(1e-300);
+    let mut sigma: Vec<f64> = rbf.gamma.iter().map(|g| (0.5 / g).sqrt()).collect();
+    let mut eta = 0.5;
+    let k = rbf.centers.len();
+    let loss = |rbf: &Rbf64| {
+        z.iter()
+            .zip(y)
+            .map(|(zr, yv)| {
+                let e = (yv - eval_z(rbf, zr)) / ys;
+                e * e
+            })
+            .sum::<f64>()
+            / (2.0 * n)
+    };
+    let mut current = loss(&rbf);
+    for _ in 0..iterations {
+        let mut gw = vec![0.0; k];
+        let mut gb = 0.0;
+        let mut gc = vec![vec![0.0; z.first().map_or(0, Vec::len)]; k];
+        let mut gs = vec![0.0; k];
+        for (zr, yv) in z.iter().zip(y) {
+            let e = (yv - eval_z(&rbf, zr)) / ys;
+            gb += e / n;
+            for j in 0..k {
+                let (Some(c), Some(s), Some(w)) =
+                    (rbf.centers.get(j), sigma.get(j), rbf.weights.get(j))
+                else {
+                    continue;
+                };
+                let d2 = crate::kmeans::dist2(zr, c);
+                let phi = (-d2 / (2.0 * s * s)).exp();
+                if let Some(g) = gw.get_mut(j) {
+                    *g += e * phi / n;
+                }
+                let common = e * (w / ys) * phi / n;
+                if let Some(gcj) = gc.get_mut(j) {
+                    for ((g, zk), ck) in gcj.iter_mut().zip(zr).zip(c) {
+                        *g += common * (zk - ck) / (s * s);
+                    }
+                }
+                if let Some(g) = gs.get_mut(j) {
+                    *g += common * d2 / (s * s * s);
+                }
+            }
+        }
+        let mut next = rbf.clone();
+        let mut next_sigma = sigma.clone();
+        next.bias += eta * gb * ys;
+        for j in 0..k {
+            if let (Some(w), Some(g)) = (next.weights.get_mut(j), gw.get(j)) {
+                *w += eta * g * ys;
+            }
+            if let (Some(c), Some(g)) = (next.centers.get_mut(j), gc.get(j)) {
+                for (cv, gv) in c.iter_mut().zip(g) {
+                    *cv += 0.1 * eta * gv;
+                }
+            }
+            if let (Some(s), Some(g)) = (next_sigma.get_mut(j), gs.get(j)) {
+                *s = (*s + 0.1 * eta * g).max(0.05);
+            }
+        }
+        next.gamma = next_sigma.iter().map(|s| 0.5 / (s * s)).collect();
+        let l = loss(&next);
+        if l <= current {
+            rbf = next;
+            sigma = next_sigma;
+            current = l;
+        } else {
+            eta *= 0.5;
+            if eta < 1e-8 {
+                break;
+            }
+        }
+    }
+    Ok(rbf)
+}
+
+fn eval_z(rbf: &Rbf64, z: &[f64]) -> f64 {
+    let mut acc = rbf.bias;
+    for ((c, g), w) in rbf.centers.iter().zip(&rbf.gamma).zip(&rbf.weights) {
+        acc += w * (-g * crate::kmeans::dist2(z, c)).exp();
+    }
+    acc
+}

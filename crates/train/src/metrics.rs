@@ -1,0 +1,323 @@
+//! Figures of merit, always measured by running the *decoded blob* through the core's f32
+//! [`Channel`] — what flies is what is measured.
+//!
+//! Why one module: `fit` (training residual), `eval` and the tests must report the same numbers the
+//! same way. Error = target − reference; residual = compensated − reference. Reported: raw and
+//! residual std, improvement %, max |residual|, the seed paper's MSD (mean square) before and after,
+//! the same on non-overlapping bin means starting at the first sample (error and correction binned
+//! alike, because bias instability makes 1 Hz samples strongly correlated), and a per-segment table of
+//! holds, heating and cooling ramps detected from the temperature rate.
+
+use crate::dataset::{Dataset, segments};
+use crate::error::TrainError;
+use crate::features::{F, N, bin_mean, bins};
+use crate::rbf64::C;
+use serde::Serialize;
+use tcomp_core::{Channel, Model, Status};
+
+/// Which columns play which role when evaluating.
+#[derive(Clone, Debug, Default)]
+pub struct Roles {
+    /// Time column.
+    pub time: String,
+    /// Sensor output column.
+    pub target: String,
+    /// Reference column.
+    pub reference: Option<String>,
+    /// Constant reference (used when there is no reference column).
+    pub reference_value: Option<f64>,
+}
+
+impl Roles {
+    /// The roles stored in a model blob.
+    pub fn of_model(model: &Model<'_, C, F, N>) -> Self {
+        let c = &model.meta.columns;
+        Self {
+            time: c.time.to_string(),
+            target: c.target.to_string(),
+            reference: (!c.reference.is_empty()).then(|| c.reference.to_string()),
+            reference_value: c.reference_value.map(f64::from),
+        }
+    }
+
+    /// The reference series for `data` (a column, a constant, or an error when neither is given).
+    pub fn reference_series(&self, data: &Dataset) -> Result<Vec<f64>, TrainError> {
+        match (&self.reference, self.reference_value) {
+            (Some(col), _) => Ok(data.column(col)?.to_vec()),
+            (None, Some(v)) => Ok(vec![v; data.len()]),
+            (None, None) => Err(TrainError::Invalid(
+                "no reference: give --reference COL or --reference-value X".into(),
+            )),
+        }
+    }
+}
+
+/// A model run over a dataset.
+#[derive(Clone, Debug, Default)]
+pub struct Run {
+    /// Time (s).
+    pub time: Vec<f64>,
+    /// target − reference.
+    pub error: Vec<f64>,
+    /// compensated − reference.
+    pub residual: Vec<f64>,
+    /// Temperature used for segment detection.
+    pub temperature: Vec<f64>,
+    /// Samples flagged out of the trained range.
+    pub out_of_range: usize,
+    /// Samples flagged as input faults.
+    pub faults: usize,
+    /// Gaps across which the channel was reset.
+    pub gaps: usize,
+}
+
+/// Runs the model through a core [`Channel`] over `data`, resetting at gaps. `temperature` names the
+/// column used for segment detection (default: the program's first input).
+pub fn run_model(
+    model: &Model<'_, C, F, N>,
+    data: &Dataset,
+    roles: &Roles,
+    temperature: Option<&str>,
+    gap_s: Option<f64>,
+) -> Result<Run, TrainError> {
+    let time = data.time(&roles.time)?;
+    let target = data.column(&roles.target)?;
+    let reference = roles.reference_series(data)?;
+    let cols = crate::features::input_columns(&model.program, data)?;
+    let temp_name = temperature
+        .map(str::to_string)
+        .or_else(|| model.program.inputs.first().map(|s| s.to_string()));
+    let temp = match &temp_name {
+        Some(n) => data.column(n)?.to_vec(),
+        None => vec![0.0; data.len()],
+    };
+    let starts = segments(time, gap_s);
+    let mut ch = Channel::<N, F>::new(1.0);
+    let mut inputs = vec![0.0f32; cols.len()];
+    let mut run = Run {
+        time: time.to_vec(),
+        temperature: temp,
+        gaps: starts.len().saturating_sub(1),
+        ..Run::default()
+    };
+    let mut next = starts.iter().peekable();
+    for i in 0..time.len() {
+        if next.peek().is_some_and(|&&s| s == i) {
+            next.next();
+            ch.reset();
+        }
+        for (v, c) in inputs.iter_mut().zip(&cols) {
+            *v = c.get(i).copied().unwrap_or(f64::NAN) as f32;
+        }
+        let t = time.get(i).copied().unwrap_or(0.0);
+        let dt = if i == 0 {
+            1.0
+        } else {
+            (t - time.get(i - 1).copied().unwrap_or(t)) as f32
+        };
+        let raw = target.get(i).copied().unwrap_or(f64::NAN);
+        let r = reference.get(i).copied().unwrap_or(f64::NAN);
+        let out = ch.step_dt(Some(model), &inputs, dt, raw as f32);
+        if out.status.contains(Status::OUT_OF_RANGE) {
+            run.out_of_range += 1;
+        }
+        if out.status.contains(Status::INPUT_FAULT) {
+            run.faults += 1;
+        }
+        run.error.push(raw - r);
+        run.residual.push(f64::from(out.compensated) - r);
+    }
+    Ok(run)
+}
+
+/// Population standard deviation.
+pub fn std(v: &[f64]) -> f64 {
+    let n = v.len().max(1) as f64;
+    let m = v.iter().sum::<f64>() / n;
+    (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n).sqrt()
+}
+
+fn msd(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64
+}
+
+fn improvement(raw: f64, res: f64) -> f64 {
+    if raw > 0.0 {
+        100.0 * (1.0 - res / raw)
+    } else {
+        0.0
+    }
+}
+
+/// Figures on bin means.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Binned {
+    /// Bin length (s).
+    pub seconds: f64,
+    /// Number of bins.
+    pub bins: usize,
+    /// Std of binned error.
+    pub raw_std: f64,
+    /// Std of binned residual.
+    pub residual_std: f64,
+    /// Improvement (%).
+    pub improvement_pct: f64,
+}
+
+/// One hold or ramp.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct SegmentStats {
+    /// "hold", "heating" or "cooling".
+    pub kind: String,
+    /// Start time (s).
+    pub start_s: f64,
+    /// End time (s).
+    pub end_s: f64,
+    /// Samples.
+    pub samples: usize,
+    /// Mean temperature rate (°/min).
+    pub rate_per_min: f64,
+    /// Std of the error.
+    pub raw_std: f64,
+    /// Std of the residual.
+    pub residual_std: f64,
+}
+
+/// Everything `tcomp eval` reports.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct EvalReport {
+    /// Samples evaluated.
+    pub samples: usize,
+    /// Std of target − reference.
+    pub raw_std: f64,
+    /// Std of compensated − reference.
+    pub residual_std: f64,
+    /// 100·(1 − residual_std/raw_std).
+    pub improvement_pct: f64,
+    /// Largest |residual|.
+    pub max_abs_residual: f64,
+    /// Mean square of the error before compensation.
+    pub msd_before: f64,
+    /// Mean square of the residual.
+    pub msd_after: f64,
+    /// Figures on bin means.
+    pub binned: Binned,
+    /// Per-segment figures.
+    pub segments: Vec<SegmentStats>,
+    /// Percentage of samples flagged out of the trained range.
+    pub out_of_range_pct: f64,
+    /// Samples flagged as input faults.
+    pub input_faults: usize,
+    /// Gaps where the channel was reset.
+    pub gaps: usize,
+}
+
+/// Computes the report of a run with bins of `bin_s` seconds.
+pub fn report(run: &Run, bin_s: f64) -> EvalReport {
+    let raw_std = std(&run.error);
+    let residual_std = std(&run.residual);
+    let b = bins(&run.time, bin_s);
+    let be = bin_mean(&run.error, &b);
+    let br = bin_mean(&run.residual, &b);
+    let (braw, bres) = (std(&be), std(&br));
+    EvalReport {
+        samples: run.time.len(),
+        raw_std,
+        residual_std,
+        improvement_pct: improvement(raw_std, residual_std),
+        max_abs_residual: run.residual.iter().fold(0.0, |m, v| m.max(v.abs())),
+        msd_before: msd(&run.error),
+        msd_after: msd(&run.residual),
+        binned: Binned {
+            seconds: bin_s,
+            bins: b.len(),
+            raw_std: braw,
+            residual_std: bres,
+            improvement_pct: improvement(braw, bres),
+        },
+        segments: segment_table(run),
+        out_of_range_pct: 100.0 * run.out_of_range as f64 / run.time.len().max(1) as f64,
+        input_faults: run.faults,
+        gaps: run.gaps,
+    }
+}
+
+/// Threshold between a hold and a ramp, in temperature units per minute.
+pub const HOLD_RATE_PER_MIN: f64 = 0.1;
+
+/// Splits a run into holds, heating and cooling ramps from the temperature rate (60 s bins, central
+/// differences; runs shorter than 5 bins are merged into the previous one).
+pub fn segment_table(run: &Run) -> Vec<SegmentStats> {
+    let b = bins(&run.time, 60.0);
+    if b.len() < 3 {
+        return Vec::new();
+    }
+    let tm = bin_mean(&run.temperature, &b);
+    let ts = bin_mean(&run.time, &b);
+    let n = b.len();
+    let rate: Vec<f64> = (0..n)
+        .map(|i| {
+            let (a, c) = (i.saturating_sub(1), (i + 1).min(n - 1));
+            let dt = ts.get(c).copied().unwrap_or(0.0) - ts.get(a).copied().unwrap_or(0.0);
+            let dtemp = tm.get(c).copied().unwrap_or(0.0) - tm.get(a).copied().unwrap_or(0.0);
+            if dt > 0.0 { 60.0 * dtemp / dt } else { 0.0 }
+        })
+        .collect();
+    let kind = |r: f64| -> i8 {
+        if r > HOLD_RATE_PER_MIN {
+            1
+        } else if r < -HOLD_RATE_PER_MIN {
+            -1
+        } else {
+            0
+        }
+    };
+    // Runs of equal kind over bins: (kind, first bin, last bin exclusive).
+    let mut runs: Vec<(i8, usize, usize)> = Vec::new();
+    for (i, r) in rate.iter().enumerate() {
+        let k = kind(*r);
+        match runs.last_mut() {
+            Some(last) if last.0 == k => last.2 = i + 1,
+            _ => runs.push((k, i, i + 1)),
+        }
+    }
+    let mut merged: Vec<(i8, usize, usize)> = Vec::new();
+    for r in runs {
+        match merged.last_mut() {
+            Some(last) if last.0 == r.0 || r.2 - r.1 < 5 => last.2 = r.2,
+            Some(last) if last.2 - last.1 < 5 => {
+                last.0 = r.0;
+                last.2 = r.2;
+            }
+            _ => merged.push(r),
+        }
+    }
+    merged
+        .iter()
+        .map(|&(k, b0, b1)| {
+            let s = b.get(b0).map_or(0, |x| x.0);
+            let e = if b1 >= n {
+                run.time.len()
+            } else {
+                b.get(b1).map_or(run.time.len(), |x| x.0)
+            };
+            let err = run.error.get(s..e).unwrap_or(&[]);
+            let res = run.residual.get(s..e).unwrap_or(&[]);
+            let rates = rate.get(b0..b1).unwrap_or(&[]);
+            SegmentStats {
+                kind: match k {
+                    1 => "heating",
+                    -1 => "cooling",
+                    _ => "hold",
+                }
+                .to_string(),
+                start_s: run.time.get(s).copied().unwrap_or(0.0),
+                end_s: run.time.get(e.saturating_sub(1)).copied().unwrap_or(0.0),
+                samples: e.saturating_sub(s),
+                rate_per_min: rates.iter().sum::<f64>() / rates.len().max(1) as f64,
+                raw_std: std(err),
+                residual_std: std(res),
+            }
+        })
+        .collect()
+}

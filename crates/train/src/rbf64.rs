@@ -1,0 +1,159 @@
+//! The RBF in f64 as the fitters produce it, its design matrix, and its conversion to the core's f32
+//! [`Rbf`].
+//!
+//! Why: every method (bayes, mse, gradient, poly3) ends in the same shape, the one the core
+//! evaluates: `f(x) = bias + Σ linear_k·z_k + Σ_j w_j·exp(−γ_j‖z − c_j‖²)` with
+//! `z_k = (x_k − offset_k)·scale_k`. Fitting happens in f64; only the final coefficients are rounded.
+
+use crate::error::TrainError;
+use crate::features::F;
+use nalgebra::DMatrix;
+use tcomp_core::point::Point;
+use tcomp_core::rbf::Center;
+use tcomp_core::{HOST_CENTERS, Rbf};
+
+/// Centers per host model.
+pub const C: usize = HOST_CENTERS;
+
+/// An RBF network in f64.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Rbf64 {
+    /// Per-feature offset (raw units).
+    pub offset: Vec<f64>,
+    /// Per-feature scale (1/(std·length scale)).
+    pub scale: Vec<f64>,
+    /// Centers in normalised units.
+    pub centers: Vec<Vec<f64>>,
+    /// `γ = 1/(2σ²)` per center.
+    pub gamma: Vec<f64>,
+    /// Center weights.
+    pub weights: Vec<f64>,
+    /// Linear term on `z` (empty or zeros when unused).
+    pub linear: Vec<f64>,
+    /// Output offset.
+    pub bias: f64,
+}
+
+impl Rbf64 {
+    /// Normalised features.
+    pub fn normalise(&self, x: &[f64]) -> Vec<f64> {
+        x.iter()
+            .zip(&self.offset)
+            .zip(&self.scale)
+            .map(|((x, o), s)| (x - o) * s)
+            .collect()
+    }
+
+    /// The output for raw features `x`.
+    pub fn eval(&self, x: &[f64]) -> f64 {
+        let z = self.normalise(x);
+        let mut acc = self.bias;
+        for (l, zk) in self.linear.iter().zip(&z) {
+            acc += l * zk;
+        }
+        for ((c, g), w) in self.centers.iter().zip(&self.gamma).zip(&self.weights) {
+            acc += w * (-g * crate::kmeans::dist2(&z, c)).exp();
+        }
+        acc
+    }
+
+    /// The coefficients the core evaluates (f32).
+    pub fn to_core(&self) -> Result<Rbf<C, F>, TrainError> {
+        let nf = self.offset.len();
+        if nf == 0 || nf > F || self.centers.len() > C {
+            return Err(TrainError::Invalid(format!(
+                "model size out of capacity: {nf} features (max {F}), {} centers (max {C})",
+                self.centers.len()
+            )));
+        }
+        let p =
+            |v: &[f64]| Point::<F>::from_slice(&v.iter().map(|&x| x as f32).collect::<Vec<_>>());
+        let mut rbf = Rbf::<C, F> {
+            n_features: nf as u8,
+            offset: p(&self.offset),
+            scale: p(&self.scale),
+            linear: p(&self.linear),
+            bias: self.bias as f32,
+            ..Rbf::default()
+        };
+        for ((c, g), w) in self.centers.iter().zip(&self.gamma).zip(&self.weights) {
+            let overflow = || TrainError::Invalid("too many centers".into());
+            rbf.centers
+                .push(Center::from_natural(c, *g, *w))
+                .map_err(|_| overflow())?;
+        }
+        Ok(rbf)
+    }
+}
+
+/// Per-feature mean and standard deviation of the rows of `x`.
+pub fn mean_std(x: &[Vec<f64>]) -> (Vec<f64>, Vec<f64>) {
+    let d = x.first().map_or(0, Vec::len);
+    let n = x.len().max(1) as f64;
+    let mut mean = vec![0.0; d];
+    for r in x {
+        for (m, v) in mean.iter_mut().zip(r) {
+            *m += v / n;
+        }
+    }
+    let mut var = vec![0.0; d];
+    for r in x {
+        for ((s, v), m) in var.iter_mut().zip(r).zip(&mean) {
+            *s += (v - m) * (v - m) / n;
+        }
+    }
+    (mean, var.into_iter().map(f64::sqrt).collect())
+}
+
+/// Rows of `x` normalised by `offset` and `scale`.
+pub fn normalise_rows(x: &[Vec<f64>], offset: &[f64], scale: &[f64]) -> Vec<Vec<f64>> {
+    x.iter()
+        .map(|r| {
+            r.iter()
+                .zip(offset)
+                .zip(scale)
+                .map(|((v, o), s)| (v - o) * s)
+                .collect()
+        })
+        .collect()
+}
+
+/// Design matrix: a column of ones, the `z` columns when `linear`, then one Gaussian per center.
+pub fn design(z: &[Vec<f64>], linear: bool, centers: &[Vec<f64>], gamma: &[f64]) -> DMatrix<f64> {
+    let d = z.first().map_or(0, Vec::len);
+    let nl = if linear { d } else { 0 };
+    let m = 1 + nl + centers.len();
+    DMatrix::from_fn(z.len(), m, |i, j| {
+        let Some(r) = z.get(i) else { return 0.0 };
+        if j == 0 {
+            1.0
+        } else if j <= nl {
+            r.get(j - 1).copied().unwrap_or(0.0)
+        } else {
+            let k = j - 1 - nl;
+            match (centers.get(k), gamma.get(k)) {
+                (Some(c), Some(g)) => (-g * crate::kmeans::dist2(r, c)).exp(),
+                _ => 0.0,
+            }
+        }
+    })
+}
+
+/// Least squares `min ‖Φw − y‖` by SVD (rank-revealing, so collinear columns do not blow up).
+pub fn least_squares(phi: &DMatrix<f64>, y: &[f64]) -> Result<Vec<f64>, TrainError> {
+    let yv = nalgebra::DVector::from_column_slice(y);
+    let svd = phi.clone().svd(true, true);
+    let eps = svd.singular_values.max() * 1e-10;
+    let w = svd
+        .solve(&yv, eps)
+        .map_err(|e| TrainError::Invalid(format!("least squares failed: {e}")))?;
+    Ok(w.iter().copied().collect())
+}
+
+/// Splits a weight vector laid out as [`design`] into (bias, linear, center weights).
+pub fn split_weights(w: &[f64], nl: usize) -> (f64, Vec<f64>, Vec<f64>) {
+    let bias = w.first().copied().unwrap_or(0.0);
+    let lin = w.get(1..1 + nl).unwrap_or(&[]).to_vec();
+    let rest = w.get(1 + nl..).unwrap_or(&[]).to_vec();
+    (bias, lin, rest)
+}

@@ -1,0 +1,516 @@
+//! `fit`: from a dataset and options to a blob, with a summary — the trainer's front door.
+//!
+//! Why here and not in the CLI: tests and benchmarks call exactly what `tcomp fit` runs. The steps:
+//! check the column roles and time, split at gaps (warn; feature state is reset there), run the core's
+//! feature program over every row, check that features vary and are not collinear, record their
+//! ranges, average into bins (`average_s`, default [`DEFAULT_AVERAGE_S`]), fit by the chosen method in
+//! f64, store f32 coefficients, then decode the blob and run it through the core's `Channel` over the
+//! training data to report the training residual.
+
+use crate::bayes::{self, BayesOptions, Evidence};
+use crate::blob_io::OwnedModel;
+use crate::dataset::{DataError, Dataset, segments};
+use crate::error::TrainError;
+use crate::features::{self, FeatureSpec, bin_mean, bins};
+use crate::metrics::{self, EvalReport, Roles};
+use crate::rbf64::Rbf64;
+use crate::spec::Spec;
+use serde::Serialize;
+use std::fmt;
+use std::str::FromStr;
+use tcomp_core::{FeatureRange, ResidualLevel, SensorKind};
+
+/// Default averaging bin before fitting (s). Bias instability makes 1 Hz samples strongly
+/// correlated; fitting 30 s bin means keeps the evidence honest and costs nothing on chamber runs
+/// of hours (a 6-hour run still gives 720 bins), while a 60 s `rate` window is barely smoothed.
+pub const DEFAULT_AVERAGE_S: f64 = 30.0;
+/// Default number of centers of `mse` and `gradient`.
+pub const DEFAULT_CENTERS: usize = 16;
+/// Bin length of the residual level stored in the blob and of binned figures (s).
+pub const REPORT_BIN_S: f64 = 100.0;
+
+/// A training method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Bayesian-regularised RBF with evidence-chosen structure.
+    Bayes,
+    /// k-means + width heuristic + least squares.
+    Mse,
+    /// Gradient descent on weights, centers and widths.
+    Gradient,
+    /// Cubic in one clamped temperature.
+    Poly3,
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Bayes => "bayes",
+            Self::Mse => "mse",
+            Self::Gradient => "gradient",
+            Self::Poly3 => "poly3",
+        })
+    }
+}
+
+impl FromStr for Method {
+    type Err = TrainError;
+    fn from_str(s: &str) -> Result<Self, TrainError> {
+        match s {
+            "bayes" => Ok(Self::Bayes),
+            "mse" => Ok(Self::Mse),
+            "gradient" => Ok(Self::Gradient),
+            "poly3" => Ok(Self::Poly3),
+            _ => Err(TrainError::Invalid(format!(
+                "unknown method `{s}` (known: bayes, mse, gradient, poly3)"
+            ))),
+        }
+    }
+}
+
+/// Parses a sensor kind name (rlg, qma, ifog, mems-gyro, mems-accel, other).
+pub fn parse_sensor(s: &str) -> Result<SensorKind, TrainError> {
+    Ok(match s {
+        "rlg" => SensorKind::Rlg,
+        "qma" => SensorKind::Qma,
+        "ifog" => SensorKind::Ifog,
+        "mems-gyro" => SensorKind::MemsGyro,
+        "mems-accel" => SensorKind::MemsAccel,
+        "other" => SensorKind::Other,
+        _ => {
+            return Err(TrainError::Invalid(format!(
+                "unknown sensor `{s}` (known: rlg, qma, ifog, mems-gyro, mems-accel, other)"
+            )));
+        }
+    })
+}
+
+/// Resolved fit options.
+#[derive(Clone, Debug)]
+pub struct FitOptions {
+    /// Time column.
+    pub time: String,
+    /// Target column.
+    pub target: String,
+    /// Reference column.
+    pub reference: Option<String>,
+    /// Constant reference; with neither, the training mean of the target is used (and stored).
+    pub reference_value: Option<f64>,
+    /// Signals and features.
+    pub spec: FeatureSpec,
+    /// Method.
+    pub method: Method,
+    /// Averaging bin (s), 0 for none.
+    pub average_s: f64,
+    /// Fixed number of centers.
+    pub centers: Option<usize>,
+    /// Linear term (bayes).
+    pub linear: bool,
+    /// Gap threshold (s); default 10× the median step.
+    pub gap_s: Option<f64>,
+    /// k-means seed.
+    pub seed: u64,
+    /// Gradient iterations.
+    pub iterations: usize,
+    /// Sensor kind.
+    pub sensor: SensorKind,
+    /// Axis label.
+    pub axis: String,
+    /// Target unit.
+    pub unit: String,
+    /// Train on time ≥ this.
+    pub from: Option<f64>,
+    /// Train on time < this.
+    pub until: Option<f64>,
+}
+
+impl FitOptions {
+    /// Options with defaults for the given target and features.
+    pub fn new(target: &str, features: &[&str]) -> Self {
+        Self {
+            time: "time_s".into(),
+            target: target.into(),
+            reference: None,
+            reference_value: None,
+            spec: FeatureSpec {
+                signals: Vec::new(),
+                features: features.iter().map(|s| s.to_string()).collect(),
+            },
+            method: Method::Bayes,
+            average_s: DEFAULT_AVERAGE_S,
+            centers: None,
+            linear: true,
+            gap_s: None,
+            seed: 1,
+            iterations: 2000,
+            sensor: SensorKind::Other,
+            axis: String::new(),
+            unit: String::new(),
+            from: None,
+            until: None,
+        }
+    }
+
+    /// Options from a spec (file and flags merged).
+    pub fn from_spec(spec: &Spec) -> Result<Self, TrainError> {
+        let target = spec
+            .target
+            .clone()
+            .ok_or_else(|| TrainError::Invalid("no target: give --target COL".into()))?;
+        let mut o = Self::new(&target, &[]);
+        o.spec = FeatureSpec {
+            signals: spec.signal.clone(),
+            features: spec.feature.clone(),
+        };
+        if let Some(t) = &spec.time {
+            o.time.clone_from(t);
+        }
+        o.reference.clone_from(&spec.reference);
+        o.reference_value = spec.reference_value;
+        if let Some(m) = &spec.method {
+            o.method = m.parse()?;
+        }
+        if let Some(a) = spec.average {
+            if !(a.is_finite() && a >= 0.0) {
+                return Err(TrainError::Invalid(format!(
+                    "--average must be ≥ 0 seconds, got {a}"
+                )));
+            }
+            o.average_s = a;
+        }
+        o.centers = spec.centers;
+        if let Some(l) = spec.linear {
+            o.linear = l;
+        }
+        o.gap_s = spec.gap;
+        if let Some(s) = spec.seed {
+            o.seed = s;
+        }
+        if let Some(i) = spec.iterations {
+            o.iterations = i;
+        }
+        if let Some(s) = &spec.sensor {
+            o.sensor = parse_sensor(s)?;
+        }
+        if let Some(a) = &spec.axis {
+            o.axis.clone_from(a);
+        }
+        if let Some(u) = &spec.unit {
+            o.unit.clone_from(u);
+        }
+        o.from = spec.from;
+        o.until = spec.until;
+        Ok(o)
+    }
+}
+
+/// What `fit` reports besides the blob.
+#[derive(Clone, Debug, Serialize)]
+pub struct FitSummary {
+    /// Method.
+    pub method: Method,
+    /// Signals.
+    pub signals: Vec<String>,
+    /// Features as stored.
+    pub features: Vec<String>,
+    /// Number of Gaussian centers.
+    pub centers: usize,
+    /// Gaussian width σ in normalised units (first center; 0 without centers).
+    pub width: f64,
+    /// Per-feature length scales (bayes).
+    pub length_scales: Vec<f64>,
+    /// Linear weights in normalised units (shows which features the model uses).
+    pub linear: Vec<f64>,
+    /// Evidence figures (bayes).
+    pub evidence: Option<Evidence>,
+    /// Settings whose evidence was compared (bayes).
+    pub settings_evaluated: usize,
+    /// Training rows.
+    pub train_rows: usize,
+    /// Training samples after averaging.
+    pub train_bins: usize,
+    /// Averaging bin (s).
+    pub average_s: f64,
+    /// The constant reference used, when there was no reference column.
+    pub reference_value: Option<f64>,
+    /// Figures on the training data (through the core).
+    pub train: EvalReport,
+    /// Warnings (gaps, defaults taken).
+    pub warnings: Vec<String>,
+    /// Blob size in bytes.
+    pub blob_bytes: usize,
+}
+
+/// A trained model: the owned description (encode it with [`OwnedModel::to_bytes`]) and its summary.
+#[derive(Clone, Debug)]
+pub struct Fitted {
+    /// The model.
+    pub model: OwnedModel,
+    /// The summary.
+    pub summary: FitSummary,
+}
+
+fn check_features(spec: &FeatureSpec, x: &[Vec<f64>], collinear: bool) -> Result<(), TrainError> {
+    let (mean, sd) = crate::rbf64::mean_std(x);
+    for (k, (m, s)) in mean.iter().zip(&sd).enumerate() {
+        if *s <= 1e-9 * (1.0 + m.abs()) {
+            return Err(TrainError::ConstantFeature {
+                expr: spec.features.get(k).cloned().unwrap_or_default(),
+                value: *m,
+            });
+        }
+    }
+    if !collinear {
+        return Ok(());
+    }
+    let d = mean.len();
+    let n = x.len().max(1) as f64;
+    for a in 0..d {
+        for b in a + 1..d {
+            let mut c = 0.0;
+            for r in x {
+                let (Some(va), Some(vb)) = (r.get(a), r.get(b)) else {
+                    continue;
+                };
+                c += (va - mean[a]) * (vb - mean[b]);
+            }
+            let corr = c / n / (sd[a] * sd[b]);
+            if corr.abs() > 0.9999 {
+                return Err(TrainError::Collinear {
+                    a: spec.features.get(a).cloned().unwrap_or_default(),
+                    b: spec.features.get(b).cloned().unwrap_or_default(),
+                    corr,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Trains a model on `data` (restricted to `opts.from..opts.until` when given).
+pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
+    let mut warnings = Vec::new();
+    let data = if opts.from.is_some() || opts.until.is_some() {
+        data.select_time(
+            &opts.time,
+            opts.from.unwrap_or(f64::NEG_INFINITY),
+            opts.until.unwrap_or(f64::INFINITY),
+        )?
+    } else {
+        data.clone()
+    };
+    let time = data.time(&opts.time)?;
+    let target = data.column(&opts.target)?;
+    let reference_value = match (&opts.reference, opts.reference_value) {
+        (Some(_), _) => None,
+        (None, Some(v)) => Some(v),
+        (None, None) => {
+            let m = target.iter().sum::<f64>() / target.len().max(1) as f64;
+            warnings.push(format!(
+                "no reference given: errors are taken against the training mean of `{}` ({m})",
+                opts.target
+            ));
+            Some(m)
+        }
+    };
+    let roles = Roles {
+        time: opts.time.clone(),
+        target: opts.target.clone(),
+        reference: opts.reference.clone(),
+        reference_value,
+    };
+    let reference = roles.reference_series(&data)?;
+    let error: Vec<f64> = target.iter().zip(&reference).map(|(a, b)| a - b).collect();
+    let starts = segments(time, opts.gap_s);
+    for &s in starts.iter().skip(1) {
+        let gap = time.get(s).copied().unwrap_or(0.0) - time.get(s - 1).copied().unwrap_or(0.0);
+        warnings.push(format!(
+            "{}:{}: gap of {gap:.3} s; feature state (rate, lag) reset there",
+            data.file(),
+            data.line(s)
+        ));
+    }
+    // The program actually stored (poly3 rewrites it around one clamped temperature).
+    let spec = if opts.method == Method::Poly3 {
+        let expr = opts.spec.features.first().ok_or_else(|| {
+            TrainError::Invalid("poly3 needs one feature: the temperature expression".into())
+        })?;
+        if opts.spec.features.len() > 1 {
+            warnings.push(format!(
+                "poly3 uses only the first feature `{expr}`; the others are ignored"
+            ));
+        }
+        let probe = FeatureSpec {
+            signals: opts.spec.signals.clone(),
+            features: vec![expr.clone()],
+        };
+        let t = features::compute(&probe.program()?, &data, time, &starts)?;
+        let (lo, hi) = t
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| {
+                (l.min(f64::from(r[0])), h.max(f64::from(r[0])))
+            });
+        let (sig, feats) = crate::poly3::program_lines(expr, lo, hi);
+        let mut signals = opts.spec.signals.clone();
+        signals.push(sig);
+        FeatureSpec {
+            signals,
+            features: feats,
+        }
+    } else {
+        opts.spec.clone()
+    };
+    let (nf, feats) = {
+        let program = spec.program()?;
+        let feats = features::compute(&program, &data, time, &starts)?;
+        (program.n_features(), feats)
+    };
+    let rows: Vec<Vec<f64>> = feats
+        .iter()
+        .map(|r| r.iter().take(nf).map(|&v| f64::from(v)).collect())
+        .collect();
+    check_features(&spec, &rows, opts.method != Method::Poly3)?;
+    let mut ranges = Vec::with_capacity(nf);
+    for k in 0..nf {
+        let (lo, hi) = feats
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), r| {
+                (l.min(r[k]), h.max(r[k]))
+            });
+        ranges.push(FeatureRange { lo, hi });
+    }
+    let b = bins(time, opts.average_s);
+    let y = bin_mean(&error, &b);
+    let cols: Vec<Vec<f64>> = (0..nf)
+        .map(|k| {
+            let c: Vec<f64> = rows
+                .iter()
+                .map(|r| r.get(k).copied().unwrap_or(0.0))
+                .collect();
+            bin_mean(&c, &b)
+        })
+        .collect();
+    let x: Vec<Vec<f64>> = (0..y.len())
+        .map(|i| {
+            cols.iter()
+                .map(|c| c.get(i).copied().unwrap_or(0.0))
+                .collect()
+        })
+        .collect();
+    let centers = opts.centers.unwrap_or(DEFAULT_CENTERS);
+    let need = match opts.method {
+        Method::Bayes => 10,
+        Method::Poly3 => 8,
+        Method::Mse | Method::Gradient => 2 * centers + 2,
+    };
+    if y.len() < need {
+        return Err(DataError::TooFewSamples {
+            file: data.file().to_string(),
+            have: y.len(),
+            need,
+            after: if opts.average_s > 0.0 {
+                format!(" after averaging into {} s bins", opts.average_s)
+            } else {
+                String::new()
+            },
+            why: format!("method {}", opts.method),
+        }
+        .into());
+    }
+    let mut evidence = None;
+    let mut length_scales = Vec::new();
+    let mut settings_evaluated = 0;
+    let mut width = 0.0;
+    let rbf: Rbf64 = match opts.method {
+        Method::Bayes => {
+            let bo = BayesOptions {
+                linear: opts.linear,
+                centers: opts.centers,
+                seed: opts.seed,
+            };
+            let f = bayes::fit(&x, &y, &bo).ok_or_else(|| {
+                TrainError::Invalid("the evidence iteration failed on every setting".into())
+            })?;
+            evidence = Some(f.evidence);
+            length_scales = f.length_scales;
+            settings_evaluated = f.evaluated;
+            width = f.width;
+            f.rbf
+        }
+        Method::Mse => crate::mse::fit(&x, &y, centers, opts.seed)?,
+        Method::Gradient => crate::gradient::fit(&x, &y, centers, opts.seed, opts.iterations)?,
+        Method::Poly3 => crate::poly3::fit(&x, &y)?,
+    };
+    if width == 0.0 {
+        width = rbf.gamma.first().map_or(0.0, |g| (0.5 / g).sqrt());
+    }
+    let t0 = time.first().copied().unwrap_or(0.0);
+    let t1 = time.last().copied().unwrap_or(0.0);
+    let mut model = OwnedModel {
+        sensor: opts.sensor,
+        axis: opts.axis.clone(),
+        unit: opts.unit.clone(),
+        method: opts.method.to_string(),
+        time: opts.time.clone(),
+        target: opts.target.clone(),
+        reference: opts.reference.clone().unwrap_or_default(),
+        reference_value: reference_value.map(|v| v as f32),
+        trained_on: format!("{} t={t0}..{t1} s", data.file()),
+        train_samples: y.len() as u32,
+        spec,
+        ranges,
+        rbf: rbf.to_core()?,
+        residual: ResidualLevel {
+            std: 0.0,
+            binned_std: 0.0,
+            bin_s: REPORT_BIN_S as f32,
+        },
+    };
+    // Measure through the decoded blob, as it will fly.
+    let bytes = model.to_bytes()?;
+    let decoded = crate::blob_io::decode(std::path::Path::new("<new model>"), &bytes)?;
+    let run = metrics::run_model(
+        &decoded,
+        &data,
+        &Roles::of_model(&decoded),
+        None,
+        opts.gap_s,
+    )?;
+    let train = metrics::report(&run, REPORT_BIN_S);
+    model.residual.std = train.residual_std as f32;
+    model.residual.binned_std = train.binned.residual_std as f32;
+    let blob_bytes = model.to_bytes()?.len();
+    let summary = FitSummary {
+        method: opts.method,
+        signals: model.spec.signals.clone(),
+        features: model.spec.features.clone(),
+        centers: rbf.centers.len(),
+        width,
+        length_scales,
+        linear: rbf.linear.clone(),
+        evidence,
+        settings_evaluated,
+        train_rows: data.len(),
+        train_bins: y.len(),
+        average_s: opts.average_s,
+        reference_value,
+        train,
+        warnings,
+        blob_bytes,
+    };
+    Ok(Fitted { model, summary })
+}
+
+/// Evaluates a decoded model on `data`: runs it through the core and computes the report.
+pub fn evaluate(
+    model: &tcomp_core::Model<'_, { crate::rbf64::C }, { features::F }, { features::N }>,
+    data: &Dataset,
+    roles: &Roles,
+    bin_s: f64,
+    temperature: Option<&str>,
+    gap_s: Option<f64>,
+) -> Result<EvalReport, TrainError> {
+    let run = metrics::run_model(model, data, roles, temperature, gap_s)?;
+    Ok(metrics::report(&run, bin_s))
+}

@@ -1,0 +1,121 @@
+//! `tcomp eval --model MODEL --data FILE`: measure a blob on a run, through the core's f32 evaluator.
+use clap::Args as ClapArgs;
+use std::path::PathBuf;
+use tcomp_train::{Dataset, EvalReport, Roles};
+
+/// Arguments of `tcomp eval`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// The model blob.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Measurement CSV (or .csv.gz).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Bin length (s) of the binned figures.
+    #[arg(long, default_value_t = 100.0)]
+    pub bin: f64,
+    /// Override the model's reference column.
+    #[arg(long)]
+    pub reference: Option<String>,
+    /// Override the model's reference with a constant.
+    #[arg(long, allow_negative_numbers = true)]
+    pub reference_value: Option<f64>,
+    /// Column for segment detection [default: the program's first input].
+    #[arg(long)]
+    pub temperature: Option<String>,
+    /// Evaluate only rows with time ≥ this (s).
+    #[arg(long, allow_negative_numbers = true)]
+    pub from: Option<f64>,
+    /// Evaluate only rows with time < this (s).
+    #[arg(long, allow_negative_numbers = true)]
+    pub until: Option<f64>,
+    /// Steps longer than this (s) are gaps [default: 10× the median step].
+    #[arg(long)]
+    pub gap: Option<f64>,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress display.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Runs the command.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.bin.is_finite() && args.bin > 0.0,
+        "--bin must be a positive number of seconds"
+    );
+    let bytes = tcomp_train::blob_io::read(&args.model)?;
+    let model = tcomp_train::blob_io::decode(&args.model, &bytes)?;
+    let mut roles = Roles::of_model(&model);
+    if let Some(r) = &args.reference {
+        roles.reference = Some(r.clone());
+    }
+    if let Some(v) = args.reference_value {
+        roles.reference = None;
+        roles.reference_value = Some(v);
+    }
+    let progress = super::progress::spinner(args.quiet, "loading data");
+    let mut data = Dataset::load(&args.data)?;
+    if args.from.is_some() || args.until.is_some() {
+        data = data.select_time(
+            &roles.time,
+            args.from.unwrap_or(f64::NEG_INFINITY),
+            args.until.unwrap_or(f64::INFINITY),
+        )?;
+    }
+    progress.set_message("evaluating");
+    let report = tcomp_train::evaluate(
+        &model,
+        &data,
+        &roles,
+        args.bin,
+        args.temperature.as_deref(),
+        args.gap,
+    )?;
+    progress.finish_and_clear();
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_report(&report, model.meta.unit);
+    }
+    Ok(())
+}
+
+fn print_report(r: &EvalReport, unit: &str) {
+    let u = if unit.is_empty() { "" } else { unit };
+    println!("samples          {}", r.samples);
+    println!("raw std          {:.6e} {u}", r.raw_std);
+    println!("residual std     {:.6e} {u}", r.residual_std);
+    println!("improvement      {:.1} %", r.improvement_pct);
+    println!("max |residual|   {:.6e} {u}", r.max_abs_residual);
+    println!("MSD before       {:.6e}", r.msd_before);
+    println!("MSD after        {:.6e}", r.msd_after);
+    println!(
+        "{} s bins ({})  raw std {:.6e}  residual std {:.6e}  improvement {:.1} %",
+        r.binned.seconds,
+        r.binned.bins,
+        r.binned.raw_std,
+        r.binned.residual_std,
+        r.binned.improvement_pct
+    );
+    println!(
+        "out of range     {:.1} % of samples; input faults {}; gaps {}",
+        r.out_of_range_pct, r.input_faults, r.gaps
+    );
+    if !r.segments.is_empty() {
+        println!();
+        println!(
+            "{:<8} {:>10} {:>10} {:>10} {:>14} {:>14}",
+            "segment", "start s", "end s", "°/min", "raw std", "residual std"
+        );
+        for s in &r.segments {
+            println!(
+                "{:<8} {:>10.0} {:>10.0} {:>10.3} {:>14.6e} {:>14.6e}",
+                s.kind, s.start_s, s.end_s, s.rate_per_min, s.raw_std, s.residual_std
+            );
+        }
+    }
+}

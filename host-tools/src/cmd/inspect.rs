@@ -1,0 +1,145 @@
+//! `tcomp inspect MODEL`: print what a blob holds; a corrupt blob is named as such, with the reason.
+use clap::Args as ClapArgs;
+use serde_json::json;
+use std::path::PathBuf;
+
+/// Arguments of `tcomp inspect`.
+#[derive(ClapArgs)]
+pub struct Args {
+    /// The model blob (.tcm).
+    pub model: PathBuf,
+    /// Print JSON instead of the human summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs the command.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let bytes = tcomp_train::blob_io::read(&args.model)?;
+    let m = tcomp_train::blob_io::decode(&args.model, &bytes)?;
+    let nf = m.n_features();
+    let centers: Vec<_> = m
+        .rbf
+        .centers
+        .iter()
+        .map(|c| {
+            let (pos, gamma, w) = c.to_natural();
+            json!({
+                "center": pos.0.get(..nf).unwrap_or(&[]),
+                "gamma": gamma,
+                "sigma": c.sigma(),
+                "weight": w,
+            })
+        })
+        .collect();
+    let features: Vec<_> = m
+        .program
+        .feature_exprs
+        .iter()
+        .enumerate()
+        .map(|(k, e)| {
+            let r = m.ranges.get(k);
+            json!({
+                "expr": e,
+                "lo": r.map(|r| r.lo),
+                "hi": r.map(|r| r.hi),
+                "offset": m.rbf.offset.0.get(k),
+                "scale": m.rbf.scale.0.get(k),
+                "linear": m.rbf.linear.0.get(k),
+            })
+        })
+        .collect();
+    let signals: Vec<_> = m
+        .program
+        .signals
+        .iter()
+        .map(|s| format!("{} = {}", s.name, s.expr))
+        .collect();
+    let c = &m.meta.columns;
+    let value = json!({
+        "file": args.model.display().to_string(),
+        "bytes": bytes.len(),
+        "version": m.version,
+        "sensor": format!("{:?}", m.meta.sensor),
+        "axis": m.meta.axis,
+        "unit": m.meta.unit,
+        "method": m.meta.method,
+        "columns": {
+            "time": c.time, "target": c.target, "reference": c.reference,
+            "reference_value": c.reference_value,
+        },
+        "trained_on": m.meta.trained_on,
+        "train_samples": m.meta.train_samples,
+        "inputs": m.program.inputs.as_slice(),
+        "signals": signals,
+        "program_nodes": m.program.nodes.len(),
+        "features": features,
+        "bias": m.rbf.bias,
+        "centers": centers,
+        "residual": {
+            "std": m.residual.std, "binned_std": m.residual.binned_std, "bin_s": m.residual.bin_s,
+        },
+    });
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&value)?);
+        return Ok(());
+    }
+    println!(
+        "{}: valid tcomp model blob, format version {}, {} bytes",
+        args.model.display(),
+        m.version,
+        bytes.len()
+    );
+    println!(
+        "sensor       {:?}  axis {:?}  unit {:?}",
+        m.meta.sensor, m.meta.axis, m.meta.unit
+    );
+    println!("method       {}", m.meta.method);
+    println!(
+        "columns      time {}  target {}  reference {}",
+        c.time,
+        c.target,
+        match c.reference_value {
+            Some(v) if c.reference.is_empty() => format!("constant {v}"),
+            _ => c.reference.to_string(),
+        }
+    );
+    println!(
+        "trained on   {} ({} samples)",
+        m.meta.trained_on, m.meta.train_samples
+    );
+    println!("inputs       {}", m.program.inputs.join(", "));
+    for s in &signals {
+        println!("signal       {s}");
+    }
+    println!(
+        "{:<32} {:>12} {:>12} {:>12}",
+        "feature", "lo", "hi", "linear"
+    );
+    for (k, e) in m.program.feature_exprs.iter().enumerate() {
+        let r = m.ranges.get(k);
+        println!(
+            "{:<32} {:>12.5} {:>12.5} {:>12.4e}",
+            e,
+            r.map_or(f32::NAN, |r| r.lo),
+            r.map_or(f32::NAN, |r| r.hi),
+            m.rbf.linear.0.get(k).copied().unwrap_or(0.0)
+        );
+    }
+    println!("bias         {:.6e}", m.rbf.bias);
+    println!("centers      {}", m.rbf.centers.len());
+    for (j, c) in m.rbf.centers.iter().enumerate() {
+        let (pos, _, w) = c.to_natural();
+        println!(
+            "  {j:>3}  σ {:.3}  w {:+.4e}  at {:?}",
+            c.sigma(),
+            w,
+            pos.0.get(..nf).unwrap_or(&[])
+        );
+    }
+    println!(
+        "residual     std {:.4e}  binned std {:.4e} ({} s bins)",
+        m.residual.std, m.residual.binned_std, m.residual.bin_s
+    );
+    Ok(())
+}
