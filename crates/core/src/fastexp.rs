@@ -1,56 +1,89 @@
-//! The exponential of the Gaussian basis, `exp(-a)` for `a ≥ 0`, fast on a Cortex-M4F.
+//! The exponential of the Gaussian basis, fast on a Cortex-M4F.
 //!
-//! The RBF evaluator calls it once per center per sample, so it is the hot spot. `libm::expf` is
-//! accurate but branches heavily and handles the whole range; here `a` is never negative and a
-//! result below `EXP_CUTOFF` is worthless next to the other centers, so a short branch-light form does:
+//! The RBF evaluator needs one `exp(-a)` per center per sample, so this is the hot spot. `libm::expf`
+//! is accurate but branchy and covers the whole range; here the argument is bounded (the evaluator
+//! skips `a ≥ EXP_CUTOFF`, where `e^-a < 2.1e-9`). The evaluator works in *eval units*
+//! `u = a·32·log2(e)` (the factor is folded into the stored coefficients, see [`crate::rbf`]), so
+//! that `exp(-a) = 2^(-u/32)`:
 //!
-//! 1. `t = -a·log2(e)`, split into `t = n + r` with `n` an integer and `r ∈ [-0.5, 0.5]` by the
-//!    round-to-nearest "magic number" addition (no float→int conversion instruction needed);
-//! 2. `2^r` by a degree-5 polynomial fitted for relative error (1.0e-7 on the interval in exact
-//!    arithmetic);
-//! 3. `2^n` by writing `n + 127` into the exponent bits.
+//! 1. `m = round(u)` by the "magic number" addition (no float→int conversion), `d = u − m ∈ [−½, ½]`;
+//! 2. `2^(-m/32)` from a 1,024-entry table (4 KiB of flash), indexed by the low mantissa bits of the
+//!    rounded sum — no exponent arithmetic; the top 24 entries hold `2^(+i/32)` so that the slightly
+//!    negative `u` that rounding in the expanded distance can produce still index correctly;
+//! 3. `2^(-d/32)` by a degree-2 polynomial (|d/32| ≤ 1/64: truncation error 2.1e-7).
 //!
-//! Maximum error against `libm::expf` over `a ∈ [0, EXP_CUTOFF]`, on a grid of 2·10⁵ points (test
-//! `max_error_against_libm`): 1.1e-6 relative, and below 1.5e-7 absolute. The relative error grows with
-//! `a` because `a·log2(e)` is rounded to f32 (libm carries extra bits in its range reduction); it is
-//! about 3e-7 for `a < 2`, where the Gaussians that matter live. Only f32 `+ - *` and bit moves are used
-//! (no fused multiply-add), so host and target produce the same bits.
+//! About 12 instructions and no branch. Maximum error against `libm::expf` over
+//! `a ∈ [0, EXP_CUTOFF]` on a grid of 2·10⁵ points (test `max_error_against_libm`): see the
+//! constants asserted there (1.3e-6 relative, 2.5e-7 absolute). The relative error grows with `a`
+//! only because `u` itself is an f32 (libm carries extra bits in its range reduction).
+//! Only f32 `+ - *`, a bit mask and a table load are used (no fused multiply-add), so host and target
+//! produce the same bits.
 
-/// Arguments above this give `exp(-a) < 2.1e-9`, which the evaluator treats as zero.
+/// Natural-exponent arguments at or above this give `exp(-a) < 2.1e-9`: treated as zero.
 pub const EXP_CUTOFF: f32 = 20.0;
+/// `32·log2(e)`: natural exponent → eval units.
+pub const EVAL_UNITS_PER_NAT: f32 = 46.16624;
+/// [`EXP_CUTOFF`] in eval units (≈ 923, inside the table's 1,000 non-negative entries).
+pub const EVAL_CUTOFF: f32 = EXP_CUTOFF * EVAL_UNITS_PER_NAT;
 
-/// 1.5 · 2^23: adding it rounds an f32 of magnitude < 2^22 to the nearest integer.
+/// 1.5 · 2^23: adding it rounds an f32 of magnitude < 2^22 to the nearest integer, which then sits
+/// in the low mantissa bits (offset by 2^22, a multiple of the table size).
 const ROUND_MAGIC: f32 = 12_582_912.0;
-const LOG2_E: f32 = core::f32::consts::LOG2_E;
-// 2^r ≈ 1 + Σ Ck·r^k on [-0.5, 0.5]: a relative least-squares fit on Chebyshev nodes
-// (1.0e-7 relative in exact arithmetic; Taylor coefficients of the same degree give 3.7e-6).
-const C1: f32 = 0.693_146_9;
-const C2: f32 = 0.240_222_38;
-const C3: f32 = 0.055_508_93;
-const C4: f32 = 0.009_671_708;
-const C5: f32 = 0.001_321_867_7;
+/// `2^(-d/32) ≈ 1 + d·(K1 + d·K2)`, `K1 = −ln2/32`, `K2 = (ln2/32)²/2`.
+const K1: f32 = -0.02166085;
+const K2: f32 = 0.0002345962;
+const TABLE_LEN: usize = 1024;
+/// Entries from here on stand for negative `m` (wrapped indices).
+const NEGATIVE_FROM: usize = 1000;
 
-/// `exp(-a)` for `a ∈ [0, EXP_CUTOFF]`; callers skip larger arguments. Outside that domain the result is
-/// still finite and non-negative (never a panic), but not accurate.
+/// `T[j] = 2^(-j/32)` for `j < 1000`, and `2^((1024 − j)/32)` above (negative `m` wrapped).
+/// Computed in f64 at compile time and rounded once.
+static EXP2_TABLE: [f32; TABLE_LEN] = {
+    let mut t = [0.0f32; TABLE_LEN];
+    // 2^(-1/32) and its inverse in f64; repeated multiplication in f64 loses < 1e-13 over 1000 steps.
+    const STEP_DOWN: f64 = 0.978_572_062_087_700_1;
+    const STEP_UP: f64 = 1.021_897_148_654_116_7;
+    let mut v = 1.0f64;
+    let mut j = 0;
+    while j < NEGATIVE_FROM {
+        t[j] = v as f32;
+        v *= STEP_DOWN;
+        j += 1;
+    }
+    let mut v = STEP_UP;
+    let mut j = TABLE_LEN - 1;
+    while j >= NEGATIVE_FROM {
+        t[j] = v as f32;
+        v *= STEP_UP;
+        j -= 1;
+    }
+    t
+};
+
+/// `2^(-u/32)` for `u ∈ [−24, 999]` (eval units). Outside that domain the result is wrong but
+/// finite, and nothing panics. The evaluator guarantees the domain: it skips `u ≥ EVAL_CUTOFF`, and
+/// `u ≥ −24` holds whenever the distance rounding error is below 0.5 in natural units.
 #[inline(always)]
+pub fn exp2_32_neg(u: f32) -> f32 {
+    let shifted = ROUND_MAGIC + u;
+    let m = shifted - ROUND_MAGIC; // nearest integer to u, exactly
+    let d = u - m; // in [−½, ½]
+    let index = (shifted.to_bits() as usize) & (TABLE_LEN - 1);
+    let base = EXP2_TABLE.get(index).copied().unwrap_or(0.0);
+    // base·(1 + d·q) written as base + (base·d)·q: the multiply-add then accumulates into `base`,
+    // which is dead afterwards, so the M4's destructive VMLA needs no register copy.
+    let q = K1 + d * K2;
+    base + (base * d) * q
+}
+
+/// `exp(-a)`: 1 for NaN and `a ≤ 0`, 0 for `a ≥ EXP_CUTOFF` (the evaluator's flush to zero).
+#[inline]
 pub fn exp_neg(a: f32) -> f32 {
-    // Keep 2^n a normal number (n ≥ -126) whatever the caller passes; NaN and negatives become 0.
-    let a = if a > 87.0 {
-        87.0
-    } else if a >= 0.0 {
-        a
-    } else {
-        0.0
-    };
-    let t = -a * LOG2_E;
-    let shifted = t + ROUND_MAGIC;
-    let n = shifted - ROUND_MAGIC; // nearest integer to t, exactly
-    let r = t - n; // in [-0.5, 0.5]
-    let p = 1.0 + r * (C1 + r * (C2 + r * (C3 + r * (C4 + r * C5))));
-    // The low mantissa bits of `shifted` hold n in two's complement (|n| < 2^22).
-    let n_int = (shifted.to_bits() as i32).wrapping_sub(ROUND_MAGIC.to_bits() as i32);
-    let scale = f32::from_bits(((n_int + 127) as u32) << 23);
-    p * scale
+    if a >= EXP_CUTOFF {
+        return 0.0;
+    }
+    let a = if a >= 0.0 { a } else { 0.0 };
+    exp2_32_neg(a * EVAL_UNITS_PER_NAT)
 }
 
 #[cfg(test)]
@@ -60,7 +93,7 @@ mod tests {
     #[test]
     fn max_error_against_libm() {
         let (mut worst_rel, mut worst_abs, mut worst_rel_small) = (0.0f32, 0.0f32, 0.0f32);
-        for i in 0..=200_000 {
+        for i in 0..200_000 {
             let a = i as f32 * (EXP_CUTOFF / 200_000.0);
             let exact = libm::expf(-a);
             let err = (exp_neg(a) - exact).abs();
@@ -70,8 +103,8 @@ mod tests {
                 worst_rel_small = worst_rel_small.max(err / exact);
             }
         }
-        assert!(worst_rel < 1.5e-6, "max relative error {worst_rel}");
-        assert!(worst_abs < 1.5e-7, "max absolute error {worst_abs}");
+        assert!(worst_rel < 1.3e-6, "max relative error {worst_rel}");
+        assert!(worst_abs < 2.5e-7, "max absolute error {worst_abs}");
         assert!(
             worst_rel_small < 4.0e-7,
             "max relative error for a < 2: {worst_rel_small}"
@@ -79,10 +112,29 @@ mod tests {
     }
 
     #[test]
-    fn exact_at_zero_and_bounded_outside_domain() {
+    fn table_is_exact_powers() {
+        for (j, v) in EXP2_TABLE.iter().enumerate() {
+            let e = if j < NEGATIVE_FROM {
+                -(j as f64)
+            } else {
+                (TABLE_LEN - j) as f64
+            };
+            let exact = libm::exp2(e / 32.0);
+            assert!(((*v as f64 - exact) / exact).abs() < 6.0e-8, "j = {j}");
+        }
+    }
+
+    #[test]
+    fn defined_outside_the_domain() {
         assert_eq!(exp_neg(0.0), 1.0);
         assert_eq!(exp_neg(-5.0), 1.0);
-        assert!(exp_neg(1.0e30) > 0.0 && exp_neg(1.0e30) < 1.0e-37);
         assert_eq!(exp_neg(f32::NAN), 1.0);
+        assert_eq!(exp_neg(1.0e30), 0.0);
+        // Slightly negative eval-unit arguments (rounding in the expanded distance) stay accurate.
+        for u in [-0.4f32, -3.0, -23.5] {
+            let exact = libm::exp2f(-u / 32.0);
+            assert!(((exp2_32_neg(u) - exact) / exact).abs() < 4e-7, "u = {u}");
+        }
+        assert!(exp2_32_neg(5.0e6).is_finite());
     }
 }

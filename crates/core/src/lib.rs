@@ -31,7 +31,7 @@ pub use blob::{BlobError, ColumnRoles, FeatureRange, Meta, Model, ResidualLevel,
 pub use compensator::{Channel, Output, Status};
 pub use parse::{ParseError, ParseErrorKind};
 pub use program::{Op, Program, ProgramBuilder, ProgramError};
-pub use rbf::Rbf;
+pub use rbf::{Center, Rbf};
 pub use stream::{ProgramState, StepError};
 
 /// Host-side default capacity: centers per model.

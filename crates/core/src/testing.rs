@@ -5,7 +5,7 @@
 use crate::blob::{ColumnRoles, FeatureRange, Meta, Model, ResidualLevel, SensorKind};
 use crate::point::Point;
 use crate::program::{Program, ProgramBuilder};
-use crate::rbf::Rbf;
+use crate::rbf::{Center, Rbf};
 use heapless::Vec;
 
 /// The RLG feature set of the seed paper: mean temperature, its rate, two thermometer gradients.
@@ -93,10 +93,12 @@ pub fn example_model<const C: usize, const F: usize, const N: usize>(
         for ck in c.iter_mut().take(nf) {
             *ck = rng.uniform(-1.0, 1.0);
         }
-        let sigma = rng.uniform(0.3, 0.9);
-        let _ = rbf.centers.push(Point(c));
-        let _ = rbf.gamma.push(1.0 / (2.0 * sigma * sigma));
-        let _ = rbf.weights.push(rng.uniform(-0.5, 0.5));
+        let sigma = rng.uniform(0.3, 0.9) as f64;
+        let c64: [f64; F] = core::array::from_fn(|k| c.get(k).copied().unwrap_or(0.0) as f64);
+        let w = rng.uniform(-0.5, 0.5) as f64;
+        let _ = rbf
+            .centers
+            .push(Center::from_natural(&c64, 1.0 / (2.0 * sigma * sigma), w));
     }
     let meta = Meta {
         sensor: SensorKind::Rlg,

@@ -59,14 +59,14 @@ fn capacity_is_checked_by_the_smaller_firmware_type() {
 #[test]
 fn non_finite_numbers_are_refused_on_encode_and_named() {
     let mut m = example_model::<64, 8, 48>(8, 4);
-    m.rbf.weights[3] = f32::NAN;
+    m.rbf.centers[3].w = f32::NAN;
     let mut buf = vec![0u8; 8192];
     assert_eq!(
         m.encode(&mut buf).unwrap_err(),
-        BlobError::NonFinite("rbf.weights")
+        BlobError::NonFinite("rbf.centers.w")
     );
     let mut m = example_model::<64, 8, 48>(8, 4);
-    m.rbf.gamma[0] = -1.0;
+    m.rbf.centers[0].g = -1.0;
     assert!(matches!(
         m.encode(&mut buf).unwrap_err(),
         BlobError::Inconsistent(_)

@@ -14,11 +14,10 @@ fn reference(m: &Model<'_, 64, 8, 48>, x: &[f32; 8]) -> f64 {
     for k in 0..nf {
         y += r.linear.0[k] as f64 * z[k];
     }
-    for j in 0..r.centers.len() {
-        let d2: f64 = (0..nf)
-            .map(|k| (z[k] - r.centers[j].0[k] as f64).powi(2))
-            .sum();
-        y += r.weights[j] as f64 * (-(r.gamma[j] as f64) * d2).exp();
+    for center in &r.centers {
+        let (c, gamma, w) = center.to_natural();
+        let d2: f64 = (0..nf).map(|k| (z[k] - c.0[k] as f64).powi(2)).sum();
+        y += w as f64 * (-(gamma as f64) * d2).exp();
     }
     y
 }
@@ -55,4 +54,37 @@ fn linear_term_extrapolates_and_gaussians_fade() {
     assert!((y - linear_only).abs() < 1e-3, "{y} vs {linear_only}");
     m.rbf.linear = Default::default();
     assert!((m.rbf.eval(&far) - m.rbf.bias).abs() < 1e-6);
+}
+
+#[test]
+fn natural_parameters_round_trip() {
+    let c = tcomp_core::Center::<4>::from_natural(&[0.5, -1.0, 0.25, 0.0], 2.0, 0.75);
+    let (pos, gamma, w) = c.to_natural();
+    assert!(
+        (pos.0[0] - 0.5).abs() < 1e-6
+            && (pos.0[1] + 1.0).abs() < 1e-6
+            && (pos.0[2] - 0.25).abs() < 1e-6
+    );
+    assert!((gamma - 2.0).abs() < 1e-6 && w == 0.75);
+    assert!((c.sigma() - 0.5).abs() < 1e-6);
+}
+
+#[test]
+fn expanded_form_stays_accurate_at_the_edges_of_the_range() {
+    // Features three half-ranges out on every axis: ‖z‖² ≈ 36 is where the expanded distance loses
+    // the most to cancellation. The error must stay far below any sensor's noise (1e-4 of Σ|w|).
+    let m = example_model::<64, 8, 48>(64, 21);
+    let sum_w: f64 = m.rbf.centers.iter().map(|c| c.w.abs() as f64).sum();
+    let mut worst = 0.0f64;
+    for corner in 0..16u32 {
+        let mut x = [0.0f32; 8];
+        let half = [50.0f32, 5.0, 3.0, 3.0];
+        let mid = [10.0f32, 0.0, 0.0, 0.0];
+        for k in 0..4 {
+            let sign = if corner & (1 << k) != 0 { 1.0 } else { -1.0 };
+            x[k] = mid[k] + sign * 3.0 * half[k] * 0.33;
+        }
+        worst = worst.max((m.rbf.eval(&x) as f64 - reference(&m, &x)).abs());
+    }
+    assert!(worst < 1e-4 * sum_w, "worst {worst} vs sum |w| {sum_w}");
 }

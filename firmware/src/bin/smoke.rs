@@ -1,0 +1,133 @@
+//! Smoke run under QEMU: decode an embedded blob, replay a few hundred samples through the
+//! compensator, compare every output bit for bit with the host's, count instructions, and exit with
+//! QEMU's status telling the verdict. A panic or HardFault also ends the run with a failure code.
+#![no_std]
+#![no_main]
+
+use cortex_m_rt::{ExceptionFrame, entry, exception};
+use cortex_m_semihosting::hprintln;
+use tcomp_core::{Channel, Model, Status};
+use tcomp_firmware::{InstructionCounter, exit};
+
+/// The example RLG model, encoded by the build script with the host's `tcomp-core`.
+static BLOB: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_model.tcm"));
+/// Per sample: anode, cathode, shell (°C), raw (deg/h), host-compensated (f32 LE), host status (u32 LE).
+static VECTOR: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_vector.bin"));
+const RECORD: usize = 24;
+const PERIOD_S: f32 = 0.005;
+/// Evaluations timed for the per-evaluation instruction figure.
+const TIMED_EVALS: u32 = 1000;
+
+fn f32_at(rec: &[u8], i: usize) -> f32 {
+    let mut b = [0u8; 4];
+    if let Some(s) = rec.get(i * 4..i * 4 + 4) {
+        b.copy_from_slice(s);
+    }
+    f32::from_le_bytes(b)
+}
+
+#[entry]
+fn main() -> ! {
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        exit(false)
+    };
+    let counter = InstructionCounter::new(cp.SYST);
+
+    let model = match Model::<'_, 32, 4, 24>::decode(BLOB) {
+        Ok(m) => m,
+        Err(e) => {
+            hprintln!("FAIL: blob rejected: {}", e);
+            exit(false)
+        }
+    };
+    hprintln!(
+        "model: {} centers x {} features, blob {} bytes",
+        model.rbf.centers.len(),
+        model.n_features(),
+        BLOB.len()
+    );
+
+    // A corrupted copy must be refused with a reason, not crash.
+    let mut corrupt = [0u8; 2048];
+    let n = BLOB.len().min(corrupt.len());
+    corrupt[..n].copy_from_slice(&BLOB[..n]);
+    corrupt[n / 2] ^= 0x40;
+    let corrupt_rejected = Model::<'_, 32, 4, 24>::decode(&corrupt[..n]).is_err();
+
+    let mut channel = Channel::<24, 4>::new(PERIOD_S);
+    let (mut samples, mut mismatches, mut flagged) = (0u32, 0u32, 0u32);
+    let mut first_mismatch = None;
+    let (mut steps_instr, mut steps) = (0u64, 0u64);
+    for rec in VECTOR.chunks_exact(RECORD) {
+        let temps = [f32_at(rec, 0), f32_at(rec, 1), f32_at(rec, 2)];
+        let raw = f32_at(rec, 3);
+        let expected = f32_at(rec, 4).to_bits();
+        let expected_status = f32_at(rec, 5).to_bits();
+        let t0 = counter.now();
+        let out = channel.step(Some(&model), &temps, raw);
+        let t1 = counter.now();
+        steps_instr += u64::from(counter.instructions_between(t0, t1));
+        steps += 1;
+        if out.compensated.to_bits() != expected || u32::from(out.status.0) != expected_status {
+            mismatches += 1;
+            first_mismatch.get_or_insert(samples);
+        }
+        if !out.status.is_ok() {
+            flagged += 1;
+        }
+        samples += 1;
+    }
+
+    // Instructions per RBF evaluation (32 x 4), call and loop overhead included: eight feature
+    // vectors around the last one, cycled so no evaluation can be hoisted out of the loop.
+    let base = *channel.features();
+    let points: [[f32; 4]; 8] = core::array::from_fn(|i| {
+        let mut p = base;
+        p[0] += i as f32 * 0.5;
+        p[1] -= i as f32 * 0.1;
+        p
+    });
+    let mut sink = 0.0f32;
+    let t0 = counter.now();
+    for i in 0..TIMED_EVALS {
+        let x = core::hint::black_box(&points[(i & 7) as usize]);
+        sink += model.rbf.eval(x);
+    }
+    let t1 = counter.now();
+    let per_eval = counter.instructions_between(t0, t1) / TIMED_EVALS;
+    let per_step = if steps > 0 { steps_instr / steps } else { 0 };
+
+    hprintln!(
+        "samples={} mismatches={} flagged={} first_mismatch={:?}",
+        samples,
+        mismatches,
+        flagged,
+        first_mismatch
+    );
+    hprintln!(
+        "corrupt_blob_rejected={} checksum_sink={}",
+        corrupt_rejected,
+        sink
+    );
+    hprintln!(
+        "SMOKE-SUMMARY instructions_per_rbf_eval={} instructions_per_channel_step={}",
+        per_eval,
+        per_step
+    );
+    let ok = samples > 0 && mismatches == 0 && flagged >= 2 && corrupt_rejected && sink.is_finite();
+    let _ = Status::OK;
+    hprintln!("{}", if ok { "SMOKE OK" } else { "SMOKE FAIL" });
+    exit(ok)
+}
+
+#[exception]
+unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
+    hprintln!("HardFault at pc={:#x}", frame.pc());
+    exit(false)
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    hprintln!("panic: {}", info);
+    exit(false)
+}

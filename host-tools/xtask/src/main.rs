@@ -1,0 +1,109 @@
+//! `cargo xtask`: the one entry point a person and CI both run.
+//!
+//! * `cargo xtask ci`   — fmt, clippy (host and thumbv7em, `-D warnings`), host tests, the no_std
+//!   build of the core, and the QEMU smoke run with its instruction budget.
+//! * `cargo xtask smoke` — only the QEMU smoke run.
+
+use anyhow::{Context, Result, bail};
+use std::process::{Command, Stdio};
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+/// Budget for one RBF evaluation (32 centers × 4 features) under QEMU, in instructions.
+const RBF_EVAL_BUDGET: u64 = 1_000;
+
+fn main() -> Result<()> {
+    let task = std::env::args().nth(1).unwrap_or_default();
+    match task.as_str() {
+        "ci" => ci(),
+        "smoke" => smoke(),
+        _ => bail!("usage: cargo xtask <ci|smoke>"),
+    }
+}
+
+fn cargo(args: &[&str]) -> Result<()> {
+    eprintln!("$ cargo {}", args.join(" "));
+    let status = Command::new(env!("CARGO"))
+        .args(args)
+        .status()
+        .context("running cargo")?;
+    if !status.success() {
+        bail!("`cargo {}` failed ({status})", args.join(" "));
+    }
+    Ok(())
+}
+
+fn ci() -> Result<()> {
+    cargo(&["fmt", "--all", "--", "--check"])?;
+    cargo(&[
+        "clippy",
+        "--workspace",
+        "--exclude",
+        "tcomp-firmware",
+        "--all-targets",
+        "--",
+        "-D",
+        "warnings",
+    ])?;
+    cargo(&[
+        "clippy",
+        "-p",
+        "tcomp-core",
+        "-p",
+        "tcomp-hal",
+        "-p",
+        "tcomp-firmware",
+        "--target",
+        TARGET,
+        "--",
+        "-D",
+        "warnings",
+    ])?;
+    cargo(&["test", "--workspace", "--exclude", "tcomp-firmware"])?;
+    cargo(&["build", "-p", "tcomp-core", "--target", TARGET, "--release"])?;
+    cargo(&["build", "-p", "tcomp-hal", "--target", TARGET, "--release"])?;
+    smoke()
+}
+
+/// Runs the smoke binary under QEMU (the runner in `.cargo/config.toml`), echoes its output, and
+/// checks its verdict, QEMU's exit code and the instruction budget.
+fn smoke() -> Result<()> {
+    let args = [
+        "run",
+        "-p",
+        "tcomp-firmware",
+        "--target",
+        TARGET,
+        "--release",
+        "--bin",
+        "smoke",
+    ];
+    eprintln!("$ cargo {}", args.join(" "));
+    let out = Command::new(env!("CARGO"))
+        .args(args)
+        .stderr(Stdio::inherit())
+        .output()
+        .context("running QEMU (is qemu-system-arm installed?)")?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    print!("{text}");
+    if !out.status.success() || !text.contains("SMOKE OK") {
+        bail!("QEMU smoke run failed ({})", out.status);
+    }
+    let per_eval =
+        field(&text, "instructions_per_rbf_eval=").context("no instruction count in output")?;
+    if per_eval > RBF_EVAL_BUDGET {
+        bail!("RBF evaluation takes {per_eval} instructions, over the budget of {RBF_EVAL_BUDGET}");
+    }
+    println!(
+        "smoke: ok, {per_eval} instructions per 32x4 RBF evaluation (budget {RBF_EVAL_BUDGET})"
+    );
+    Ok(())
+}
+
+/// The number after `key` in `text`.
+fn field(text: &str, key: &str) -> Option<u64> {
+    let rest = &text[text.find(key)? + key.len()..];
+    rest.split(|c: char| !c.is_ascii_digit())
+        .next()?
+        .parse()
+        .ok()
+}
