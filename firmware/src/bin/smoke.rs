@@ -95,7 +95,7 @@ fn main() -> ! {
     }
     let t1 = counter.now();
     let per_eval = counter.instructions_between(t0, t1) / TIMED_EVALS;
-    let per_step = if steps > 0 { steps_instr / steps } else { 0 };
+    let per_step = steps_instr.checked_div(steps).unwrap_or(0);
 
     hprintln!(
         "samples={} mismatches={} flagged={} first_mismatch={:?}",
