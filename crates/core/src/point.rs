@@ -1,13 +1,16 @@
 //! A fixed-size vector of `F` f32 values that serde can carry.
 //!
-//! The evaluator wants centers as plain `[f32; F]` rows (the inner loop then unrolls at compile time
-//! and needs no bounds checks), but serde's derive does not cover arrays of a const-generic length.
-//! `Point` serialises as a tuple of `F` floats (postcard writes them back to back, no length prefix).
+//! The evaluator wants plain `[f32; F]` rows (the inner loop then unrolls at compile time and needs
+//! no bounds checks), but serde's derive does not cover arrays of a const-generic length, and the wire
+//! format must not depend on `F`: the host trains with `F = 8` and a firmware built with `F = 4` must
+//! read a 4-feature blob. So a `Point` is written as a sequence with its trailing zeros dropped
+//! (lossless but for the sign of a trailing zero: missing entries read back as +0), and reading more
+//! than `F` values is an error.
 
 use core::fmt;
 use core::marker::PhantomData;
 use serde::de::{Error as _, SeqAccess, Visitor};
-use serde::ser::SerializeTuple;
+use serde::ser::SerializeSeq;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// `F` f32 values; entries past a model's feature count are zero.
@@ -38,11 +41,12 @@ impl<const F: usize> Point<F> {
 
 impl<const F: usize> Serialize for Point<F> {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        let mut t = serializer.serialize_tuple(F)?;
-        for v in &self.0 {
-            t.serialize_element(v)?;
+        let len = self.0.iter().rposition(|v| *v != 0.0).map_or(0, |i| i + 1);
+        let mut seq = serializer.serialize_seq(Some(len))?;
+        for v in self.0.iter().take(len) {
+            seq.serialize_element(v)?;
         }
-        t.end()
+        seq.end()
     }
 }
 
@@ -52,15 +56,18 @@ impl<'de, const F: usize> Visitor<'de> for PointVisitor<F> {
     type Value = Point<F>;
 
     fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "a tuple of {F} f32 values")
+        write!(f, "at most {F} f32 values")
     }
 
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Point<F>, A::Error> {
         let mut p = [0.0f32; F];
-        for (i, slot) in p.iter_mut().enumerate() {
-            *slot = seq
-                .next_element()?
-                .ok_or_else(|| A::Error::invalid_length(i, &self))?;
+        let mut i = 0;
+        while let Some(v) = seq.next_element::<f32>()? {
+            let slot = p
+                .get_mut(i)
+                .ok_or_else(|| A::Error::invalid_length(i + 1, &self))?;
+            *slot = v;
+            i += 1;
         }
         Ok(Point(p))
     }
@@ -68,6 +75,6 @@ impl<'de, const F: usize> Visitor<'de> for PointVisitor<F> {
 
 impl<'de, const F: usize> Deserialize<'de> for Point<F> {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        deserializer.deserialize_tuple(F, PointVisitor::<F>(PhantomData))
+        deserializer.deserialize_seq(PointVisitor::<F>(PhantomData))
     }
 }

@@ -44,7 +44,8 @@ impl<const F: usize> Center<F> {
         let mut q = [0.0f32; F];
         let mut cc = 0.0f64;
         for (qk, ck) in q.iter_mut().zip(c) {
-            *qk = (-2.0 * g * ck) as f32;
+            // `+ 0.0` turns −0 into +0, so unused features are plain zeros on the wire.
+            *qk = (-2.0 * g * ck) as f32 + 0.0;
             cc += ck * ck;
         }
         Self {

@@ -48,12 +48,29 @@ fn capacity_is_checked_by_the_smaller_firmware_type() {
         Model::<'_, 32, 8, 48>::decode(&blob).unwrap_err(),
         BlobError::CapacityExceeded
     );
-    // 8 features declared by the host type; a 4-feature build reads the same program fine
-    // only if it was encoded with F = 4, since Point<F> has a fixed width on the wire.
-    let m4 = example_model::<32, 4, 24>(32, 3);
+    // The wire format does not depend on F: a 4-feature model written by the host build (F = 8)
+    // reads into the firmware's F = 4 type with the same numbers, and back.
+    let host = example_model::<64, 8, 48>(32, 3);
     let mut buf = [0u8; 4096];
-    let n = m4.encode(&mut buf).unwrap();
-    assert_eq!(Model::<'_, 32, 4, 24>::decode(&buf[..n]).unwrap(), m4);
+    let n = host.encode(&mut buf).unwrap();
+    let fw = Model::<'_, 32, 4, 24>::decode(&buf[..n]).unwrap();
+    let x4 = [12.0f32, 0.5, -0.3, 0.2];
+    let x8 = [12.0f32, 0.5, -0.3, 0.2, 0.0, 0.0, 0.0, 0.0];
+    assert_eq!(fw.rbf.eval(&x4).to_bits(), host.rbf.eval(&x8).to_bits());
+    let mut buf2 = [0u8; 4096];
+    let n2 = fw.encode(&mut buf2).unwrap();
+    assert_eq!(
+        &buf[..n],
+        &buf2[..n2],
+        "re-encoding with F = 4 gives the same bytes"
+    );
+    // A program with more features than the firmware holds is refused, not truncated.
+    let mut wide = example_model::<64, 8, 48>(4, 3);
+    wide.rbf.offset.0[6] = 1.0;
+    let mut buf3 = [0u8; 4096];
+    if let Ok(n3) = wide.encode(&mut buf3) {
+        assert!(Model::<'_, 32, 4, 24>::decode(&buf3[..n3]).is_err());
+    }
 }
 
 #[test]
