@@ -13,12 +13,13 @@
 //! formed once per setting).
 //!
 //! The model is then *chosen* by the log evidence, never by verification data: the number of centers
-//! (0, 4, 8, 16, 32), a global width, and per-feature length scales (a few rounds of coordinate
-//! search), each candidate fitted in parallel with rayon. Because the evidence can drive both α to
+//! (0, 4, 8, 16, 32), a global width, and per-feature length scales (two rounds of coordinate
+//! search over 0.25…64 feature standard deviations; the linear columns are kept in standardised
+//! units so their prior does not change with the length scales), each candidate fitted in parallel with rayon. Because the evidence can drive both α to
 //! infinity, a channel with no temperature effect gets a nearly flat model.
 
 use crate::kmeans::kmeans;
-use crate::rbf64::{Rbf64, design, mean_std, normalise_rows, split_weights};
+use crate::rbf64::{Rbf64, design_scaled, mean_std, normalise_rows, split_weights};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -179,7 +180,7 @@ struct Candidate {
 
 const WIDTHS: [f64; 8] = [0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0];
 const CENTER_GRID: [usize; 5] = [0, 4, 8, 16, 32];
-const LS_STEPS: [f64; 4] = [0.25, 0.5, 2.0, 4.0];
+const LENGTH_SCALES: [f64; 8] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 64.0];
 
 /// Fits a Bayesian-regularised RBF to rows `x` (raw features) and targets `y`, choosing the number
 /// of centers, the width and the length scales by the log evidence.
@@ -210,7 +211,7 @@ pub fn fit(x: &[Vec<f64>], y: &[f64], opts: &BayesOptions) -> Option<BayesFit> {
             .collect();
         let centers = kmeans(&z, m, opts.seed);
         let gamma = vec![1.0 / (2.0 * sigma * sigma); centers.len()];
-        let phi = design(&z, opts.linear, &centers, &gamma);
+        let phi = design_scaled(&z, opts.linear, Some(ls), &centers, &gamma);
         let fit = evidence_fit(&phi, &yn, nl)?;
         Some(Candidate {
             m,
@@ -250,12 +251,13 @@ pub fn fit(x: &[Vec<f64>], y: &[f64], opts: &BayesOptions) -> Option<BayesFit> {
     for _round in 0..2 {
         if best.m > 0 {
             for k in 0..d {
-                let cands: Vec<Vec<f64>> = LS_STEPS
+                let cands: Vec<Vec<f64>> = LENGTH_SCALES
                     .iter()
-                    .map(|f| {
+                    .filter(|&&v| best.ls.get(k) != Some(&v))
+                    .map(|&v| {
                         let mut ls = best.ls.clone();
                         if let Some(l) = ls.get_mut(k) {
-                            *l = (*l * f).clamp(0.125, 16.0);
+                            *l = v;
                         }
                         ls
                     })
@@ -284,7 +286,7 @@ pub fn fit(x: &[Vec<f64>], y: &[f64], opts: &BayesOptions) -> Option<BayesFit> {
         centers: best.centers,
         weights: wg.iter().map(|w| w * ys).collect(),
         linear: if opts.linear {
-            lin.iter().map(|w| w * ys).collect()
+            lin.iter().zip(&best.ls).map(|(w, l)| w * l * ys).collect()
         } else {
             vec![0.0; d]
         },

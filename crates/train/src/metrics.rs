@@ -194,6 +194,10 @@ pub struct EvalReport {
     pub residual_std: f64,
     /// 100·(1 − residual_std/raw_std).
     pub improvement_pct: f64,
+    /// Root mean square of the error (counts a constant offset, unlike the std).
+    pub raw_rms: f64,
+    /// Root mean square of the residual.
+    pub residual_rms: f64,
     /// Largest |residual|.
     pub max_abs_residual: f64,
     /// Mean square of the error before compensation.
@@ -225,6 +229,8 @@ pub fn report(run: &Run, bin_s: f64) -> EvalReport {
         raw_std,
         residual_std,
         improvement_pct: improvement(raw_std, residual_std),
+        raw_rms: msd(&run.error).sqrt(),
+        residual_rms: msd(&run.residual).sqrt(),
         max_abs_residual: run.residual.iter().fold(0.0, |m, v| m.max(v.abs())),
         msd_before: msd(&run.error),
         msd_after: msd(&run.residual),

@@ -120,6 +120,18 @@ pub fn normalise_rows(x: &[Vec<f64>], offset: &[f64], scale: &[f64]) -> Vec<Vec<
 
 /// Design matrix: a column of ones, the `z` columns when `linear`, then one Gaussian per center.
 pub fn design(z: &[Vec<f64>], linear: bool, centers: &[Vec<f64>], gamma: &[f64]) -> DMatrix<f64> {
+    design_scaled(z, linear, None, centers, gamma)
+}
+
+/// As [`design`], with the linear columns multiplied by `lin_scale` (per feature) when given — so
+/// that the linear weights' prior does not depend on the length scales folded into `z`.
+pub fn design_scaled(
+    z: &[Vec<f64>],
+    linear: bool,
+    lin_scale: Option<&[f64]>,
+    centers: &[Vec<f64>],
+    gamma: &[f64],
+) -> DMatrix<f64> {
     let d = z.first().map_or(0, Vec::len);
     let nl = if linear { d } else { 0 };
     let m = 1 + nl + centers.len();
@@ -128,7 +140,8 @@ pub fn design(z: &[Vec<f64>], linear: bool, centers: &[Vec<f64>], gamma: &[f64])
         if j == 0 {
             1.0
         } else if j <= nl {
-            r.get(j - 1).copied().unwrap_or(0.0)
+            let f = lin_scale.and_then(|l| l.get(j - 1)).copied().unwrap_or(1.0);
+            r.get(j - 1).copied().unwrap_or(0.0) * f
         } else {
             let k = j - 1 - nl;
             match (centers.get(k), gamma.get(k)) {

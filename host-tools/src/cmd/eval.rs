@@ -90,6 +90,8 @@ fn print_report(r: &EvalReport, unit: &str) {
     println!("raw std          {:.6e} {u}", r.raw_std);
     println!("residual std     {:.6e} {u}", r.residual_std);
     println!("improvement      {:.1} %", r.improvement_pct);
+    println!("raw rms          {:.6e} {u}", r.raw_rms);
+    println!("residual rms     {:.6e} {u}", r.residual_rms);
     println!("max |residual|   {:.6e} {u}", r.max_abs_residual);
     println!("MSD before       {:.6e}", r.msd_before);
     println!("MSD after        {:.6e}", r.msd_after);

@@ -37,7 +37,7 @@ pub struct Args {
     /// Method: bayes (default), mse, gradient, poly3.
     #[arg(long)]
     pub method: Option<String>,
-    /// Average into non-overlapping bins of this many seconds before fitting; 0 = off [default: 30].
+    /// Average into non-overlapping bins of this many seconds before fitting; 0 = off [default: 120, shortened on short runs to leave 60 bins].
     #[arg(long)]
     pub average: Option<f64>,
     /// Number of centers (bayes: fixed instead of chosen by evidence; mse/gradient: default 16).

@@ -1,0 +1,160 @@
+//! Bad input gets an error naming file, line and column.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
+
+use std::io::Write;
+use tcomp_train::{Dataset, FitOptions, TrainError, fit};
+
+fn write(dir: &tempfile::TempDir, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.path().join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn good_csv(rows: usize) -> String {
+    let mut s = String::from("time_s,t_coil_c,gyro_dph\n");
+    for i in 0..rows {
+        let t = i as f64;
+        let temp = 20.0 + 10.0 * (t / 600.0).sin();
+        s.push_str(&format!("{t},{temp},{}\n", 0.01 * temp));
+    }
+    s
+}
+
+#[test]
+fn misspelled_column_suggests_the_closest() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(&dir, "run.csv", &good_csv(10));
+    let d = Dataset::load(&p).unwrap();
+    let e = d.column("t_coil").unwrap_err().to_string();
+    assert!(e.contains("run.csv:1"), "{e}");
+    assert!(e.contains("did you mean `t_coil_c`"), "{e}");
+    let e = d.column("gyro_DPH").unwrap_err().to_string();
+    assert!(e.contains("did you mean `gyro_dph`"), "{e}");
+}
+
+#[test]
+fn non_numeric_cell_names_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = good_csv(10);
+    text = text.replacen("3,", "3x,", 1); // time 3 → "3x" on line 5, column 1
+    let p = write(&dir, "bad.csv", &text);
+    let d = Dataset::load(&p).unwrap();
+    let e = d.time("time_s").unwrap_err().to_string();
+    assert!(e.contains("bad.csv:5:1"), "{e}");
+    assert!(e.contains("`3x`"), "{e}");
+    // An unused bad column is no error.
+    assert!(d.column("gyro_dph").is_ok());
+}
+
+#[test]
+fn nan_cell_is_rejected_with_position() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut lines: Vec<String> = good_csv(10).lines().map(str::to_string).collect();
+    lines[7] = "6,NaN,0.1".into();
+    let p = write(&dir, "nan.csv", &(lines.join("\n") + "\n"));
+    let d = Dataset::load(&p).unwrap();
+    let e = d.column("t_coil_c").unwrap_err().to_string();
+    assert!(e.contains("nan.csv:8:2"), "{e}");
+    assert!(e.contains("not finite"), "{e}");
+}
+
+#[test]
+fn non_monotonic_and_duplicate_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut lines: Vec<String> = good_csv(10).lines().map(str::to_string).collect();
+    lines[5] = "3,20,0.2".into(); // line 6 repeats time 3 of line 5
+    let p = write(&dir, "dup.csv", &(lines.join("\n") + "\n"));
+    let e = Dataset::load(&p)
+        .unwrap()
+        .time("time_s")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("dup.csv:6:1"), "{e}");
+    assert!(e.contains("equal to"), "{e}");
+    lines[5] = "1.5,20,0.2".into();
+    let p = write(&dir, "back.csv", &(lines.join("\n") + "\n"));
+    let e = Dataset::load(&p)
+        .unwrap()
+        .time("time_s")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("back.csv:6:1") && e.contains("before"), "{e}");
+}
+
+#[test]
+fn empty_file_ragged_row_and_gzip() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(&dir, "empty.csv", "");
+    let e = Dataset::load(&p).unwrap_err().to_string();
+    assert!(e.contains("empty.csv") && e.contains("no header"), "{e}");
+    let p = write(&dir, "header.csv", "time_s,x\n");
+    let e = Dataset::load(&p).unwrap_err().to_string();
+    assert!(e.contains("no data rows"), "{e}");
+    let p = write(&dir, "ragged.csv", "time_s,x\n0,1\n1,2,3\n");
+    let e = Dataset::load(&p).unwrap_err().to_string();
+    assert!(e.contains("ragged.csv:3"), "{e}");
+    // gzip reads the same
+    let gz = dir.path().join("run.csv.gz");
+    let mut enc = flate2::write::GzEncoder::new(
+        std::fs::File::create(&gz).unwrap(),
+        flate2::Compression::fast(),
+    );
+    enc.write_all(good_csv(20).as_bytes()).unwrap();
+    enc.finish().unwrap();
+    let d = Dataset::load(&gz).unwrap();
+    assert_eq!(d.len(), 20);
+}
+
+#[test]
+fn fit_level_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(&dir, "short.csv", &good_csv(60));
+    let d = Dataset::load(&p).unwrap();
+    // too few samples after averaging
+    let opts = FitOptions::new("gyro_dph", &["t_coil_c"]);
+    let e = fit(&d, &opts).unwrap_err().to_string();
+    assert!(e.contains("short.csv") && e.contains("at least"), "{e}");
+    // constant feature
+    let p = write(&dir, "long.csv", &good_csv(3000));
+    let d = Dataset::load(&p).unwrap();
+    let opts = FitOptions::new("gyro_dph", &["t_coil_c", "t_coil_c * 0 + 3"]);
+    let e = fit(&d, &opts).unwrap_err();
+    assert!(matches!(e, TrainError::ConstantFeature { .. }), "{e}");
+    // collinear features
+    let opts = FitOptions::new("gyro_dph", &["t_coil_c", "2 * t_coil_c + 1"]);
+    let e = fit(&d, &opts).unwrap_err();
+    assert!(matches!(e, TrainError::Collinear { .. }), "{e}");
+    // bad expression, with the position
+    let opts = FitOptions::new("gyro_dph", &["rate(t_coil_c"]);
+    let e = fit(&d, &opts).unwrap_err().to_string();
+    assert!(e.contains("rate(t_coil_c") && e.contains('^'), "{e}");
+    // unknown column in a feature
+    let opts = FitOptions::new("gyro_dph", &["t_coil"]);
+    let e = fit(&d, &opts).unwrap_err().to_string();
+    assert!(e.contains("did you mean `t_coil_c`"), "{e}");
+}
+
+#[test]
+fn gaps_are_warned_and_reset() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = String::from("time_s,t_coil_c,gyro_dph\n");
+    for i in 0..4000 {
+        let t = if i < 2000 {
+            i as f64
+        } else {
+            i as f64 + 5000.0
+        };
+        let temp = 20.0 + 10.0 * (t / 900.0).sin();
+        s.push_str(&format!("{t},{temp},{}\n", 0.01 * temp));
+    }
+    let p = write(&dir, "gap.csv", &s);
+    let d = Dataset::load(&p).unwrap();
+    let f = fit(
+        &d,
+        &FitOptions::new("gyro_dph", &["t_coil_c", "rate(t_coil_c)"]),
+    )
+    .unwrap();
+    let w = f.summary.warnings.join("\n");
+    assert!(w.contains("gap.csv:2002") && w.contains("reset"), "{w}");
+    assert_eq!(f.summary.train.gaps, 1);
+}
