@@ -111,9 +111,10 @@ fn fit_level_errors() {
     let p = write(&dir, "short.csv", &good_csv(60));
     let d = Dataset::load(&p).unwrap();
     // too few samples after averaging
-    let opts = FitOptions::new("gyro_dph", &["t_coil_c"]);
+    let mut opts = FitOptions::new("gyro_dph", &["t_coil_c"]);
+    opts.average_s = Some(30.0);
     let e = fit(&d, &opts).unwrap_err().to_string();
-    assert!(e.contains("short.csv") && e.contains("at least"), "{e}");
+    assert!(e.contains("short.csv") && e.contains("at least 10"), "{e}");
     // constant feature
     let p = write(&dir, "long.csv", &good_csv(3000));
     let d = Dataset::load(&p).unwrap();
