@@ -25,6 +25,8 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     if env::var("TARGET").is_ok_and(|t| t.starts_with("thumb")) {
         println!("cargo:rustc-link-arg-bins=-Tlink.x");
+        // The replay binary logs with defmt (decoded on the host by `defmt-print`).
+        println!("cargo:rustc-link-arg-bin=replay=-Tdefmt.x");
     }
 
     let model = example_model::<32, 4, 24>(32, 11);

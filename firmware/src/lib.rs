@@ -1,56 +1,39 @@
-//! Board support shared by the firmware binaries: semihosting exit codes and the instruction counter.
+//! The firmware: the compensation loop ([`app`]), the model-blob image in flash ([`image`]), the
+//! replay board of the QEMU run ([`replay`]), and board support for the binaries (semihosting exit
+//! codes, the SysTick instruction counter).
+//!
+//! Only the board support touches hardware and is compiled for the target alone
+//! (`cfg(target_os = "none")`); the rest builds on the host, where `cargo xtask qemu` runs the very
+//! same loop over the replay vector to produce the outputs the firmware must reproduce bit for bit.
 //!
 //! Under QEMU with `-icount shift=0` every guest instruction takes one nanosecond of virtual time and
 //! SysTick runs from the 25 MHz board clock, so one SysTick tick is 40 instructions: counting ticks
 //! counts instructions deterministically (QEMU does not emulate the DWT cycle counter).
 #![no_std]
 
-use cortex_m::peripheral::SYST;
-use cortex_m::peripheral::syst::SystClkSource;
+pub mod app;
+pub mod image;
+pub mod replay;
 
-/// Instructions per SysTick tick on mps2-an386 under `-icount shift=0` (1 GHz virtual / 25 MHz).
-pub const INSTRUCTIONS_PER_TICK: u32 = 40;
+#[cfg(target_os = "none")]
+mod board;
+#[cfg(target_os = "none")]
+pub use board::*;
 
-/// Free-running SysTick used as an instruction counter.
-pub struct InstructionCounter {
-    syst: SYST,
+/// FNV-1a over the bits of a record, folded into `hash`: the running output hash both sides print.
+pub fn fold_hash(hash: u32, record: &app::Record) -> u32 {
+    let mut h = hash;
+    for b in record
+        .compensated
+        .to_bits()
+        .to_le_bytes()
+        .into_iter()
+        .chain(record.status.to_le_bytes())
+    {
+        h = (h ^ u32::from(b)).wrapping_mul(0x0100_0193);
+    }
+    h
 }
 
-impl InstructionCounter {
-    /// Starts SysTick counting down from its 24-bit maximum.
-    pub fn new(mut syst: SYST) -> Self {
-        syst.set_clock_source(SystClkSource::Core);
-        syst.set_reload(0x00FF_FFFF);
-        syst.clear_current();
-        syst.enable_counter();
-        Self { syst }
-    }
-
-    /// The current tick count (counts down, wraps every 2^24 ticks).
-    pub fn now(&self) -> u32 {
-        SYST::get_current()
-    }
-
-    /// Instructions elapsed from `start` to `end` (one wrap at most).
-    pub fn instructions_between(&self, start: u32, end: u32) -> u32 {
-        let ticks = start.wrapping_sub(end) & 0x00FF_FFFF;
-        ticks.saturating_mul(INSTRUCTIONS_PER_TICK)
-    }
-
-    /// Gives SysTick back.
-    pub fn free(self) -> SYST {
-        self.syst
-    }
-}
-
-/// Ends the QEMU run: exit code 0 when `ok`, 1 otherwise.
-pub fn exit(ok: bool) -> ! {
-    use cortex_m_semihosting::debug;
-    debug::exit(if ok {
-        debug::EXIT_SUCCESS
-    } else {
-        debug::EXIT_FAILURE
-    });
-    #[allow(clippy::empty_loop)]
-    loop {}
-}
+/// FNV-1a offset basis: the hash before any record.
+pub const HASH_START: u32 = 0x811C_9DC5;

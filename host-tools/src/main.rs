@@ -24,6 +24,8 @@ enum Command {
     Eval(cmd::eval::Args),
     /// Simulate temperature-chamber runs with known physics: train.csv, verify.csv and truth.json.
     Simulate(cmd::simulate::Args),
+    /// Pack one model blob per firmware channel into the image flashed at 0x003F0000.
+    Image(cmd::image::Args),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -33,5 +35,6 @@ fn main() -> anyhow::Result<()> {
         Command::Fit(args) => cmd::fit::run(&args),
         Command::Eval(args) => cmd::eval::run(&args),
         Command::Simulate(args) => cmd::simulate::run(&args),
+        Command::Image(args) => cmd::image::run(&args),
     }
 }

@@ -2,6 +2,7 @@
 
 pub mod eval;
 pub mod fit;
+pub mod image;
 pub mod inspect;
 mod progress;
 pub mod simulate;

@@ -3,6 +3,12 @@
 //! * `cargo xtask ci`   — fmt, clippy (host and thumbv7em, `-D warnings`), host tests, the no_std
 //!   build of the core, and the QEMU smoke run with its instruction budget.
 //! * `cargo xtask smoke` — only the QEMU smoke run.
+//! * `cargo xtask qemu`  — the QEMU replay of the 200 Hz loop with bit-exact host parity, fault
+//!   checks and budgets (see `qemu.rs`).
+
+mod elf;
+mod qemu;
+mod vector;
 
 use anyhow::{Context, Result, bail};
 use std::process::{Command, Stdio};
@@ -16,7 +22,8 @@ fn main() -> Result<()> {
     match task.as_str() {
         "ci" => ci(),
         "smoke" => smoke(),
-        _ => bail!("usage: cargo xtask <ci|smoke>"),
+        "qemu" => qemu::qemu(),
+        _ => bail!("usage: cargo xtask <ci|smoke|qemu>"),
     }
 }
 
@@ -61,7 +68,8 @@ fn ci() -> Result<()> {
     cargo(&["test", "--workspace", "--exclude", "tcomp-firmware"])?;
     cargo(&["build", "-p", "tcomp-core", "--target", TARGET, "--release"])?;
     cargo(&["build", "-p", "tcomp-hal", "--target", TARGET, "--release"])?;
-    smoke()
+    smoke()?;
+    qemu::qemu()
 }
 
 /// Runs the smoke binary under QEMU (the runner in `.cargo/config.toml`), echoes its output, and

@@ -1,0 +1,342 @@
+//! The compensation loop's application logic, independent of the board it runs on.
+//!
+//! Once per period the loop reads every thermometer and pulse counter of the configuration through the
+//! [`tcomp_hal`] traits, then steps each channel's compensator and emits one [`Record`] per channel:
+//! the compensated rate or acceleration and a [`status`] word. Nothing here touches hardware, so
+//! the host runs exactly this code over the replay vector to produce the outputs the QEMU run must
+//! reproduce bit for bit.
+//!
+//! Fault handling, per sample, never a panic:
+//! * a thermometer read that fails (bus error, open sensor, …) feeds NaN to the channels that use
+//!   it: the core holds the last good features and flags `INPUT_FAULT`; the loop adds
+//!   [`status::SENSOR_ERROR`];
+//! * a thermometer returning the very same bits for [`STUCK_SAMPLES`] samples flags
+//!   [`status::STUCK`] (a 24-bit ADC on a live sensor never does);
+//! * a counter read that fails gives a NaN raw value (flagged); the pulses are not lost, the next good
+//!   read covers the missed periods and is divided by their total length;
+//! * a channel whose blob is missing, corrupt or reads inputs it is not wired to runs with
+//!   `NO_MODEL`: raw value passed through, flagged.
+
+use crate::image::{Image, ImageError};
+use tcomp_core::{BlobError, Channel, MAX_INPUTS, Model};
+use tcomp_hal::scale::ChannelScale;
+use tcomp_hal::{PulseCounter, Thermometer};
+
+/// Centers per model in the firmware.
+pub const CENTERS: usize = 32;
+/// Features per model in the firmware.
+pub const FEATURES: usize = 4;
+/// Feature-program nodes per model in the firmware.
+pub const NODES: usize = 16;
+/// A model as the firmware holds it: numbers in RAM, strings borrowed from the image in flash.
+pub type FwModel<'a> = Model<'a, CENTERS, FEATURES, NODES>;
+/// One channel's streaming state.
+pub type FwChannel = Channel<NODES, FEATURES>;
+
+/// The loop period: 200 Hz.
+pub const PERIOD_S: f32 = 0.005;
+/// Identical readings in a row that mark a thermometer as stuck (2 s at 200 Hz).
+pub const STUCK_SAMPLES: u16 = 400;
+/// Most thermometers a configuration reads.
+pub const MAX_THERMOMETERS: usize = 12;
+/// Most pulse counters a configuration reads.
+pub const MAX_COUNTERS: usize = 6;
+
+/// The status word of one output: the core's [`tcomp_core::Status`] bits plus the loop's own.
+pub mod status {
+    /// Model present, inputs good and in range.
+    pub const OK: u16 = 0;
+    /// No valid model: raw passed through (core bit).
+    pub const NO_MODEL: u16 = 1;
+    /// A feature outside its trained range, clamped (core bit).
+    pub const OUT_OF_RANGE: u16 = 2;
+    /// A NaN/infinite input or raw value: last good features held (core bit).
+    pub const INPUT_FAULT: u16 = 4;
+    /// A thermometer or counter read of this channel returned an error.
+    pub const SENSOR_ERROR: u16 = 8;
+    /// A thermometer of this channel has returned identical readings for too long.
+    pub const STUCK: u16 = 16;
+}
+
+/// One channel of a configuration: which thermometers (by the model's input column names) and which
+/// counter it reads, and how counts become its output unit.
+#[derive(Clone, Copy, Debug)]
+pub struct ChannelConfig {
+    /// Channel id, the key of its blob in the image.
+    pub id: u16,
+    /// Short name for logs.
+    pub name: &'static str,
+    /// `(input column name, thermometer index)`.
+    pub thermometers: &'static [(&'static str, u8)],
+    /// Counter index.
+    pub counter: u8,
+    /// Scale factor of the counter.
+    pub scale: ChannelScale,
+}
+
+/// Arcsec per pulse of the replayed RLG counters (a fine interpolating read-out, so the replayed
+/// rate is not dominated by quantisation).
+pub const RLG_ARCSEC_PER_PULSE: f32 = 1.0e-5;
+/// µg per Hz of the replayed QMA current-to-frequency converters.
+pub const QMA_UG_PER_HZ: f32 = 0.01;
+
+const fn rlg(
+    id: u16,
+    name: &'static str,
+    t: &'static [(&'static str, u8)],
+    c: u8,
+) -> ChannelConfig {
+    ChannelConfig {
+        id,
+        name,
+        thermometers: t,
+        counter: c,
+        scale: ChannelScale::rlg_arcsec_per_pulse(RLG_ARCSEC_PER_PULSE),
+    }
+}
+
+const fn qma(
+    id: u16,
+    name: &'static str,
+    t: &'static [(&'static str, u8)],
+    c: u8,
+) -> ChannelConfig {
+    ChannelConfig {
+        id,
+        name,
+        thermometers: t,
+        counter: c,
+        scale: ChannelScale::qma_ug_per_hz(QMA_UG_PER_HZ),
+    }
+}
+
+/// The strapdown IMU: three RLGs (anode, cathode, shell thermometers each) and three QMAs (one each).
+/// Thermometers 0–8 are the RLGs', 9–11 the QMAs'; counters 0–2 the RLGs', 3–5 the QMAs'.
+pub const IMU6: [ChannelConfig; 6] = [
+    rlg(
+        0,
+        "rlg-x",
+        &[("t_anode_c", 0), ("t_cathode_c", 1), ("t_shell_c", 2)],
+        0,
+    ),
+    rlg(
+        1,
+        "rlg-y",
+        &[("t_anode_c", 3), ("t_cathode_c", 4), ("t_shell_c", 5)],
+        1,
+    ),
+    rlg(
+        2,
+        "rlg-z",
+        &[("t_anode_c", 6), ("t_cathode_c", 7), ("t_shell_c", 8)],
+        2,
+    ),
+    qma(3, "qma-x", &[("t_qma_c", 9)], 3),
+    qma(4, "qma-y", &[("t_qma_c", 10)], 4),
+    qma(5, "qma-z", &[("t_qma_c", 11)], 5),
+];
+
+/// A single fiber-optic gyro with its coil thermometer (channel id 6).
+pub const IFOG1: [ChannelConfig; 1] = [ChannelConfig {
+    id: 6,
+    name: "ifog",
+    thermometers: &[("t_coil_c", 0)],
+    counter: 0,
+    scale: ChannelScale::rlg_arcsec_per_pulse(RLG_ARCSEC_PER_PULSE),
+}];
+
+/// Why a channel has no model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub enum LoadError {
+    /// The image, or this channel's entry in it.
+    Image(ImageError),
+    /// The blob was rejected by `Model::decode`.
+    Blob(BlobError),
+    /// The model reads an input column this channel has no thermometer for.
+    Unwired,
+}
+
+/// One output of one channel.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Record {
+    /// Compensated rate (°/h) or acceleration (µg); the raw value when there is no model.
+    pub compensated: f32,
+    /// [`status`] bits.
+    pub status: u16,
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct ThermState {
+    value: f32,
+    last_bits: u32,
+    repeats: u16,
+    error: bool,
+}
+
+/// The loop for a configuration of `K` channels.
+pub struct App<'a, const K: usize> {
+    config: &'static [ChannelConfig; K],
+    models: [Option<FwModel<'a>>; K],
+    /// For each channel, model input `i` reads thermometer `map[i]`.
+    input_map: [[u8; MAX_INPUTS]; K],
+    n_inputs: [u8; K],
+    channels: [FwChannel; K],
+    therms: [ThermState; MAX_THERMOMETERS],
+    missed: [u16; MAX_COUNTERS],
+}
+
+impl<'a, const K: usize> App<'a, K> {
+    /// The loop with no models yet.
+    pub fn new(config: &'static [ChannelConfig; K]) -> Self {
+        Self {
+            config,
+            models: [const { None }; K],
+            input_map: [[0; MAX_INPUTS]; K],
+            n_inputs: [0; K],
+            channels: [const { Channel::new(PERIOD_S) }; K],
+            therms: [ThermState::default(); MAX_THERMOMETERS],
+            missed: [0; MAX_COUNTERS],
+        }
+    }
+
+    /// Loads every channel's model from the image bytes; returns each channel's outcome. A channel
+    /// that fails keeps running without a model.
+    pub fn load(&mut self, image: &'a [u8]) -> [Result<(), LoadError>; K] {
+        let image = Image::parse(image);
+        core::array::from_fn(|k| {
+            let loaded = self.load_channel(k, image);
+            if loaded.is_err() {
+                if let Some(m) = self.models.get_mut(k) {
+                    *m = None;
+                }
+            }
+            loaded
+        })
+    }
+
+    fn load_channel(
+        &mut self,
+        k: usize,
+        image: Result<Image<'a>, ImageError>,
+    ) -> Result<(), LoadError> {
+        let cfg = self.config.get(k).ok_or(LoadError::Unwired)?;
+        let blob = image
+            .and_then(|i| i.blob(cfg.id))
+            .map_err(LoadError::Image)?;
+        let model = FwModel::decode(blob).map_err(LoadError::Blob)?;
+        let map = self.input_map.get_mut(k).ok_or(LoadError::Unwired)?;
+        for (slot, name) in map.iter_mut().zip(model.program.inputs.iter()) {
+            let (_, t) = cfg
+                .thermometers
+                .iter()
+                .find(|(n, _)| n == name)
+                .ok_or(LoadError::Unwired)?;
+            if usize::from(*t) >= MAX_THERMOMETERS {
+                return Err(LoadError::Unwired);
+            }
+            *slot = *t;
+        }
+        if let Some(n) = self.n_inputs.get_mut(k) {
+            *n = model.program.inputs.len() as u8;
+        }
+        if let (Some(m), Some(c)) = (self.models.get_mut(k), self.channels.get_mut(k)) {
+            *m = Some(model);
+            c.reset();
+        }
+        Ok(())
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &'static [ChannelConfig; K] {
+        self.config
+    }
+
+    /// One period: read all sensors, step all channels, write one record per channel.
+    pub fn sample<T: Thermometer, P: PulseCounter>(
+        &mut self,
+        thermometers: &mut [T],
+        counters: &mut [P],
+        out: &mut [Record; K],
+    ) {
+        for (t, s) in thermometers.iter_mut().zip(self.therms.iter_mut()) {
+            match t.read_celsius() {
+                Ok(v) => {
+                    let bits = v.to_bits();
+                    s.repeats = if bits == s.last_bits {
+                        s.repeats.saturating_add(1)
+                    } else {
+                        0
+                    };
+                    *s = ThermState {
+                        value: v,
+                        last_bits: bits,
+                        repeats: s.repeats,
+                        error: false,
+                    };
+                }
+                Err(_) => {
+                    s.value = f32::NAN;
+                    s.error = true;
+                }
+            }
+        }
+        // Counts and the interval they cover (longer after failed reads); `None` on a failed read.
+        let mut pulses = [None; MAX_COUNTERS];
+        for ((c, p), missed) in counters.iter_mut().zip(&mut pulses).zip(&mut self.missed) {
+            match c.read_delta() {
+                Ok(counts) => {
+                    *p = Some((counts, PERIOD_S * f32::from(missed.saturating_add(1))));
+                    *missed = 0;
+                }
+                Err(_) => *missed = missed.saturating_add(1),
+            }
+        }
+        for (k, rec) in out.iter_mut().enumerate() {
+            *rec = self.step_channel(k, &pulses);
+        }
+    }
+
+    fn step_channel(&mut self, k: usize, pulses: &[Option<(i32, f32)>; MAX_COUNTERS]) -> Record {
+        let (Some(cfg), Some(channel), Some(map), Some(n)) = (
+            self.config.get(k),
+            self.channels.get_mut(k),
+            self.input_map.get(k),
+            self.n_inputs.get(k),
+        ) else {
+            return Record::default();
+        };
+        let mut flags = 0u16;
+        let raw = match pulses.get(usize::from(cfg.counter)).copied().flatten() {
+            Some((counts, dt)) => cfg.scale.rate(counts, dt).unwrap_or(f32::NAN),
+            None => {
+                flags |= status::SENSOR_ERROR;
+                f32::NAN
+            }
+        };
+        for &(_, t) in cfg.thermometers {
+            if let Some(s) = self.therms.get(usize::from(t)) {
+                if s.error {
+                    flags |= status::SENSOR_ERROR;
+                }
+                if s.repeats >= STUCK_SAMPLES {
+                    flags |= status::STUCK;
+                }
+            }
+        }
+        let mut inputs = [0.0f32; MAX_INPUTS];
+        for (x, &t) in inputs.iter_mut().zip(map.iter()).take(usize::from(*n)) {
+            *x = self
+                .therms
+                .get(usize::from(t))
+                .map_or(f32::NAN, |s| s.value);
+        }
+        let model = self.models.get(k).and_then(Option::as_ref);
+        let inputs = inputs.get(..usize::from(*n)).unwrap_or(&[]);
+        let o = channel.step(model, inputs, raw);
+        Record {
+            compensated: o.compensated,
+            status: u16::from(o.status.0) | flags,
+        }
+    }
+}

@@ -1,0 +1,238 @@
+//! The replay board: [`Thermometer`]s and [`PulseCounter`]s that play back a recorded test vector,
+//! so the very application code of [`crate::app`] runs on it, on the host and under QEMU alike.
+//!
+//! The vector is written by `cargo xtask qemu` from a simulator run at 200 Hz (see
+//! `firmware/replay/*.toml`) with faults injected, together with the outputs the host computed for it.
+//! Under QEMU it is loaded into the board's 16 MiB `mps.ram` at `0x2100_0000` (test data, not
+//! firmware: it is not linked and not counted in the flash budget). Little-endian layout:
+//!
+//! ```text
+//! offset  size  field
+//! 0       4     magic b"TCRV"
+//! 4       2     version (1)
+//! 6       2     configuration: 0 = IMU6 (3 RLG + 3 QMA), 1 = IFOG1
+//! 8       4     samples S
+//! 12      2     thermometers T
+//! 14      2     counters P
+//! 16      2     channels K
+//! 18      2     reserved (0)
+//! 20      4·P   counter registers before the first sample (u32)
+//! …       S × (4 + 4T + 4P)   per sample: fault mask u32 (bit i: thermometer i bus error,
+//!                             bit 16+j: counter j bus error), T temperatures (f32 °C, may be NaN),
+//!                             P counter registers (u32, free-running, wrapping)
+//! …       S × K × 8           expected output per sample and channel: compensated f32 bits (u32),
+//!                             status (u32)
+//! ```
+//!
+//! A replayed NaN temperature is returned as `Ok(NaN)` on purpose, although the [`Thermometer`]
+//! contract promises finite values: it tests the loop's defence against a driver that breaks it.
+
+use crate::app::{MAX_COUNTERS, MAX_THERMOMETERS, Record};
+use tcomp_hal::{ErrorKind, ErrorType, PulseCounter, Thermometer, wrapping_delta};
+
+/// The four bytes a vector starts with.
+pub const MAGIC: [u8; 4] = *b"TCRV";
+/// The vector format version.
+pub const VERSION: u16 = 1;
+/// Bytes before the initial counter values.
+pub const HEADER_LEN: usize = 20;
+/// Configuration code of [`crate::app::IMU6`].
+pub const CONFIG_IMU6: u16 = 0;
+/// Configuration code of [`crate::app::IFOG1`].
+pub const CONFIG_IFOG1: u16 = 1;
+
+fn u16_at(b: &[u8], at: usize) -> u16 {
+    b.get(at..at + 2)
+        .map_or(0, |s| u16::from_le_bytes([s[0], s[1]]))
+}
+
+fn u32_at(b: &[u8], at: usize) -> u32 {
+    b.get(at..at + 4)
+        .map_or(0, |s| u32::from_le_bytes([s[0], s[1], s[2], s[3]]))
+}
+
+/// Why a vector is unusable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub enum VectorError {
+    /// No magic or another version.
+    BadHeader,
+    /// More thermometers or counters than the board has.
+    TooWide,
+    /// Shorter than its header says.
+    Truncated,
+}
+
+/// A validated test vector.
+#[derive(Clone, Copy, Debug)]
+pub struct Vector<'a> {
+    bytes: &'a [u8],
+    /// Configuration code.
+    pub config: u16,
+    /// Samples.
+    pub samples: usize,
+    /// Thermometers per sample.
+    pub thermometers: usize,
+    /// Counters per sample.
+    pub counters: usize,
+    /// Channels per expected record.
+    pub channels: usize,
+}
+
+impl<'a> Vector<'a> {
+    /// Checks the header and the length.
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, VectorError> {
+        if bytes.get(..4) != Some(&MAGIC[..]) || u16_at(bytes, 4) != VERSION {
+            return Err(VectorError::BadHeader);
+        }
+        let v = Self {
+            bytes,
+            config: u16_at(bytes, 6),
+            samples: u32_at(bytes, 8) as usize,
+            thermometers: usize::from(u16_at(bytes, 12)),
+            counters: usize::from(u16_at(bytes, 14)),
+            channels: usize::from(u16_at(bytes, 16)),
+        };
+        if v.thermometers > MAX_THERMOMETERS || v.counters > MAX_COUNTERS {
+            return Err(VectorError::TooWide);
+        }
+        if bytes.len() < v.total_len() {
+            return Err(VectorError::Truncated);
+        }
+        Ok(v)
+    }
+
+    /// Bytes of one input record.
+    pub fn record_len(&self) -> usize {
+        4 + 4 * self.thermometers + 4 * self.counters
+    }
+
+    fn inputs_at(&self) -> usize {
+        HEADER_LEN + 4 * self.counters
+    }
+
+    fn expected_at(&self) -> usize {
+        self.inputs_at() + self.samples * self.record_len()
+    }
+
+    /// The vector's full length in bytes.
+    pub fn total_len(&self) -> usize {
+        self.expected_at() + self.samples * self.channels * 8
+    }
+
+    /// The host's output for `sample`, `channel`.
+    pub fn expected(&self, sample: usize, channel: usize) -> Record {
+        let at = self.expected_at() + (sample * self.channels + channel) * 8;
+        Record {
+            compensated: f32::from_bits(u32_at(self.bytes, at)),
+            status: u32_at(self.bytes, at + 4) as u16,
+        }
+    }
+
+    /// A board positioned before the first sample.
+    pub fn board(&self) -> Board {
+        let mut b = Board {
+            thermometers: [ReplayThermometer::default(); MAX_THERMOMETERS],
+            counters: [ReplayCounter::default(); MAX_COUNTERS],
+            n_thermometers: self.thermometers,
+            n_counters: self.counters,
+        };
+        for (j, c) in b.counters.iter_mut().take(self.counters).enumerate() {
+            let r = u32_at(self.bytes, HEADER_LEN + 4 * j);
+            *c = ReplayCounter {
+                register: r,
+                last: r,
+                fault: false,
+            };
+        }
+        b
+    }
+
+    /// Loads sample `n` into the board's sensors (what the front ends would latch at the tick).
+    pub fn load(&self, n: usize, board: &mut Board) {
+        let at = self.inputs_at() + n * self.record_len();
+        let faults = u32_at(self.bytes, at);
+        for (i, t) in board
+            .thermometers
+            .iter_mut()
+            .take(self.thermometers)
+            .enumerate()
+        {
+            *t = ReplayThermometer {
+                value: f32::from_bits(u32_at(self.bytes, at + 4 + 4 * i)),
+                fault: faults & (1 << i) != 0,
+            };
+        }
+        let counters_at = at + 4 + 4 * self.thermometers;
+        for (j, c) in board.counters.iter_mut().take(self.counters).enumerate() {
+            c.register = u32_at(self.bytes, counters_at + 4 * j);
+            c.fault = faults & (1 << (16 + j)) != 0;
+        }
+    }
+}
+
+/// One replayed thermometer: the latched reading of the current sample.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ReplayThermometer {
+    value: f32,
+    fault: bool,
+}
+
+impl ErrorType for ReplayThermometer {
+    type Error = ErrorKind;
+}
+
+impl Thermometer for ReplayThermometer {
+    fn read_celsius(&mut self) -> Result<f32, ErrorKind> {
+        if self.fault {
+            Err(ErrorKind::Bus)
+        } else {
+            Ok(self.value)
+        }
+    }
+}
+
+/// One replayed 32-bit free-running counter register.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ReplayCounter {
+    register: u32,
+    last: u32,
+    fault: bool,
+}
+
+impl ErrorType for ReplayCounter {
+    type Error = ErrorKind;
+}
+
+impl PulseCounter for ReplayCounter {
+    fn read_delta(&mut self) -> Result<i32, ErrorKind> {
+        if self.fault {
+            // The register keeps counting; the next good read returns everything since `last`.
+            return Err(ErrorKind::Bus);
+        }
+        let delta = wrapping_delta(self.last, self.register, 32);
+        self.last = self.register;
+        Ok(delta)
+    }
+}
+
+/// The replayed sensors of a configuration.
+#[derive(Clone, Debug)]
+pub struct Board {
+    thermometers: [ReplayThermometer; MAX_THERMOMETERS],
+    counters: [ReplayCounter; MAX_COUNTERS],
+    n_thermometers: usize,
+    n_counters: usize,
+}
+
+impl Board {
+    /// The thermometers and counters, as the loop reads them.
+    pub fn sensors(&mut self) -> (&mut [ReplayThermometer], &mut [ReplayCounter]) {
+        let t = self
+            .thermometers
+            .get_mut(..self.n_thermometers)
+            .unwrap_or(&mut []);
+        let c = self.counters.get_mut(..self.n_counters).unwrap_or(&mut []);
+        (t, c)
+    }
+}

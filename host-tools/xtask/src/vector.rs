@@ -1,0 +1,204 @@
+//! The replay vectors: simulator CSVs at 200 Hz → sensor samples with injected faults, and the
+//! host's outputs for them (the firmware's own loop, run here), in the layout of
+//! `firmware/src/replay.rs`.
+
+use anyhow::{Context, Result, bail};
+use std::path::Path;
+use tcomp_firmware::app::{
+    App, ChannelConfig, PERIOD_S, QMA_UG_PER_HZ, RLG_ARCSEC_PER_PULSE, Record,
+};
+use tcomp_firmware::replay::{HEADER_LEN, MAGIC, VERSION, Vector};
+use tcomp_firmware::{HASH_START, fold_hash};
+
+/// A column-addressable CSV.
+pub struct Csv {
+    header: Vec<String>,
+    rows: Vec<Vec<f64>>,
+}
+
+impl Csv {
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+        let mut lines = text.lines();
+        let header = lines
+            .next()
+            .context("empty CSV")?
+            .split(',')
+            .map(String::from)
+            .collect();
+        let rows = lines
+            .map(|l| {
+                l.split(',')
+                    .map(|v| v.trim().parse().unwrap_or(f64::NAN))
+                    .collect()
+            })
+            .collect();
+        Ok(Self { header, rows })
+    }
+
+    pub fn column(&self, name: &str, from: usize, n: usize) -> Result<Vec<f64>> {
+        let i = self
+            .header
+            .iter()
+            .position(|h| h == name)
+            .with_context(|| format!("no column {name}"))?;
+        let rows = self
+            .rows
+            .get(from..from + n)
+            .context("CSV too short for the vector")?;
+        Ok(rows
+            .iter()
+            .map(|r| r.get(i).copied().unwrap_or(f64::NAN))
+            .collect())
+    }
+}
+
+/// One sensor stream of the vector and the faults injected into it.
+pub struct Inputs {
+    pub temps: Vec<Vec<f32>>,
+    pub therm_faults: Vec<Vec<bool>>,
+    pub counters: Vec<Vec<u32>>,
+    pub counter_start: Vec<u32>,
+    pub counter_faults: Vec<Vec<bool>>,
+}
+
+impl Inputs {
+    pub fn new(samples: usize) -> Self {
+        let _ = samples;
+        Self {
+            temps: vec![],
+            therm_faults: vec![],
+            counters: vec![],
+            counter_start: vec![],
+            counter_faults: vec![],
+        }
+    }
+
+    pub fn samples(&self) -> usize {
+        self.temps.first().map_or(0, Vec::len)
+    }
+
+    pub fn thermometer(&mut self, celsius: &[f64]) -> usize {
+        self.temps.push(celsius.iter().map(|&t| t as f32).collect());
+        self.therm_faults.push(vec![false; celsius.len()]);
+        self.temps.len() - 1
+    }
+
+    /// A free-running 32-bit counter integrating `rate` (°/h or µg) at `per_pulse`, starting at
+    /// `start` pulses before the register wraps through zero.
+    pub fn counter(&mut self, rate: &[f64], per_pulse: f32, wrap_after: u64) -> usize {
+        let start = (0u64.wrapping_sub(wrap_after) & 0xFFFF_FFFF) as u32;
+        let mut pulses = 0.0f64;
+        let regs = rate
+            .iter()
+            .map(|r| {
+                pulses += r * f64::from(PERIOD_S) / f64::from(per_pulse);
+                start.wrapping_add(pulses.floor() as i64 as u32)
+            })
+            .collect();
+        self.counters.push(regs);
+        self.counter_start.push(start);
+        self.counter_faults.push(vec![false; rate.len()]);
+        self.counters.len() - 1
+    }
+
+    /// Serialises the inputs with zeroed expected outputs for `channels`.
+    fn bytes(&self, config: u16, channels: usize) -> Vec<u8> {
+        let n = self.samples();
+        let mut b = Vec::new();
+        b.extend_from_slice(&MAGIC);
+        b.extend_from_slice(&VERSION.to_le_bytes());
+        b.extend_from_slice(&config.to_le_bytes());
+        b.extend_from_slice(&(n as u32).to_le_bytes());
+        b.extend_from_slice(&(self.temps.len() as u16).to_le_bytes());
+        b.extend_from_slice(&(self.counters.len() as u16).to_le_bytes());
+        b.extend_from_slice(&(channels as u16).to_le_bytes());
+        b.extend_from_slice(&0u16.to_le_bytes());
+        debug_assert_eq!(b.len(), HEADER_LEN);
+        for s in &self.counter_start {
+            b.extend_from_slice(&s.to_le_bytes());
+        }
+        for i in 0..n {
+            let mut mask = 0u32;
+            for (t, f) in self.therm_faults.iter().enumerate() {
+                mask |= u32::from(f[i]) << t;
+            }
+            for (c, f) in self.counter_faults.iter().enumerate() {
+                mask |= u32::from(f[i]) << (16 + c);
+            }
+            b.extend_from_slice(&mask.to_le_bytes());
+            for t in &self.temps {
+                b.extend_from_slice(&t[i].to_bits().to_le_bytes());
+            }
+            for c in &self.counters {
+                b.extend_from_slice(&c[i].to_le_bytes());
+            }
+        }
+        b.resize(b.len() + n * channels * 8, 0);
+        b
+    }
+}
+
+/// Runs the firmware's loop on the host over `inputs` with `image`, and returns the finished vector
+/// (expected outputs filled in), the outputs, and their hash.
+pub fn build<const K: usize>(
+    config_code: u16,
+    config: &'static [ChannelConfig; K],
+    inputs: &Inputs,
+    image: &[u8],
+) -> Result<(Vec<u8>, Vec<[Record; K]>, u32)> {
+    let mut bytes = inputs.bytes(config_code, K);
+    let outputs = {
+        let v = Vector::parse(&bytes).map_err(|e| anyhow::anyhow!("vector: {e:?}"))?;
+        let mut app = App::<K>::new(config);
+        for (c, r) in config.iter().zip(app.load(image)) {
+            if let Err(e) = r {
+                eprintln!("host: channel {}: no model ({e:?})", c.name);
+            }
+        }
+        let mut board = v.board();
+        let mut outputs = Vec::with_capacity(v.samples);
+        for n in 0..v.samples {
+            v.load(n, &mut board);
+            let (t, c) = board.sensors();
+            let mut out = [Record::default(); K];
+            app.sample(t, c, &mut out);
+            outputs.push(out);
+        }
+        outputs
+    };
+    let mut hash = HASH_START;
+    let tail = bytes.len() - outputs.len() * K * 8;
+    for (i, rec) in outputs.iter().flatten().enumerate() {
+        hash = fold_hash(hash, rec);
+        let at = tail + i * 8;
+        bytes[at..at + 4].copy_from_slice(&rec.compensated.to_bits().to_le_bytes());
+        bytes[at + 4..at + 8].copy_from_slice(&u32::from(rec.status).to_le_bytes());
+    }
+    Ok((bytes, outputs, hash))
+}
+
+/// Scales of the replayed counters (the firmware's channel configuration).
+pub const RLG_PER_PULSE: f32 = RLG_ARCSEC_PER_PULSE;
+/// µg·s per QMA pulse.
+pub const QMA_PER_PULSE: f32 = QMA_UG_PER_HZ;
+
+/// Fails unless every sample in `range` of `channel` has all of `flags`.
+pub fn expect_flag<const K: usize>(
+    outputs: &[[Record; K]],
+    what: &str,
+    channel: usize,
+    range: std::ops::Range<usize>,
+    flags: u16,
+) -> Result<()> {
+    for n in range {
+        let s = outputs[n][channel].status;
+        if s & flags != flags {
+            bail!(
+                "fault `{what}` not flagged: sample {n} channel {channel} status {s:#x}, expected {flags:#x}"
+            );
+        }
+    }
+    println!("fault {what}: flagged (status bits {flags:#x})");
+    Ok(())
+}
