@@ -8,7 +8,10 @@
 //! * a NaN/infinite input or a bad time step: the program state is not advanced, the last good
 //!   features are held, the sample is flagged [`Status::INPUT_FAULT`], and the skipped time is carried
 //!   into the next good step so rates and lags stay on the clock;
-//! * a feature outside the range seen in training: clamped to it, flagged [`Status::OUT_OF_RANGE`];
+//! * a feature outside the range seen in training: flagged [`Status::OUT_OF_RANGE`]; the Gaussians see
+//!   it clamped to that range (they were fitted only inside it), while the linear term sees it clamped
+//!   to the range widened by one span on each side, so a trend keeps extrapolating somewhat beyond
+//!   the trained envelope (what the linear term is for) but never without bound;
 //! * no model: the raw value passes through, flagged [`Status::NO_MODEL`].
 
 use crate::blob::Model;
@@ -162,17 +165,25 @@ impl<const N: usize, const F: usize> Channel<N, F> {
                 status: status.with(Status::INPUT_FAULT),
             };
         }
-        let mut x = self.features;
-        for (v, r) in x.iter_mut().zip(&model.ranges) {
-            if *v < r.lo {
-                *v = r.lo;
+        let mut x_gauss = self.features;
+        let mut x_linear = self.features;
+        for ((g, l), r) in x_gauss
+            .iter_mut()
+            .zip(x_linear.iter_mut())
+            .zip(&model.ranges)
+        {
+            let span = r.hi - r.lo;
+            if *g < r.lo {
+                *g = r.lo;
+                *l = if *l < r.lo - span { r.lo - span } else { *l };
                 status = status.with(Status::OUT_OF_RANGE);
-            } else if *v > r.hi {
-                *v = r.hi;
+            } else if *g > r.hi {
+                *g = r.hi;
+                *l = if *l > r.hi + span { r.hi + span } else { *l };
                 status = status.with(Status::OUT_OF_RANGE);
             }
         }
-        let correction = model.rbf.eval(&x);
+        let correction = model.rbf.eval_split(&x_gauss, &x_linear);
         Output {
             compensated: raw - correction,
             correction,

@@ -130,9 +130,30 @@ impl<const C: usize, const F: usize> Rbf<C, F> {
             acc += *l * *zk;
             zz += *zk * *zk;
         }
+        acc + self.gaussians(&z, zz)
+    }
+
+    /// The model output with the Gaussians evaluated at `x_gauss` and the linear term at `x_linear`
+    /// (the compensator clamps the two differently). `eval_split(x, x)` equals `eval(x)` bit for bit.
+    pub fn eval_split(&self, x_gauss: &[f32; F], x_linear: &[f32; F]) -> f32 {
+        let zl = self.normalise(x_linear);
+        let zg = self.normalise(x_gauss);
+        let mut acc = self.bias;
+        let mut zz = 0.0f32;
+        for ((l, zlk), zgk) in self.linear.0.iter().zip(&zl).zip(&zg) {
+            acc += *l * *zlk;
+            zz += *zgk * *zgk;
+        }
+        acc + self.gaussians(&zg, zz)
+    }
+
+    /// `Σj wj·exp(−γj‖z − cj‖²)` in the expanded form, `zz = ‖z‖²`.
+    #[inline(always)]
+    fn gaussians(&self, z: &[f32; F], zz: f32) -> f32 {
+        let mut acc = 0.0f32;
         for c in &self.centers {
             let mut u = c.p + c.g * zz;
-            for (qk, zk) in c.q.0.iter().zip(&z) {
+            for (qk, zk) in c.q.0.iter().zip(z) {
                 u += *qk * *zk;
             }
             if u < EVAL_CUTOFF {

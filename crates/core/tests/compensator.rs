@@ -65,11 +65,27 @@ fn nan_input_holds_last_good_features_and_keeps_the_clock() {
 fn out_of_range_is_clamped_and_flagged() {
     let m = model();
     let mut ch = Channel::<24, 4>::new(1.0);
+    // T = 90 °C against a trained −40…60 °C (span 100): Gaussians see 60, the linear term 90.
     let out = ch.step(Some(&m), &[90.0, 90.0, 90.0], 0.0);
     assert!(out.status.contains(Status::OUT_OF_RANGE));
-    let mut clamped = *ch.features();
+    let raw_features = *ch.features();
+    let mut clamped = raw_features;
     clamped[0] = 60.0;
-    assert_eq!(out.correction, m.rbf.eval(&clamped));
+    assert_eq!(out.correction, m.rbf.eval_split(&clamped, &raw_features));
+    assert_ne!(
+        out.correction,
+        m.rbf.eval(&clamped),
+        "the linear term extrapolates"
+    );
+    // Far beyond, the linear term stops one span out: 500 °C is treated as 160 °C.
+    let mut ch = Channel::<24, 4>::new(1.0);
+    let out = ch.step(Some(&m), &[500.0, 500.0, 500.0], 0.0);
+    let mut lin = *ch.features();
+    lin[0] = 160.0;
+    assert_eq!(out.correction, m.rbf.eval_split(&clamped, &lin));
+    // In range, the split evaluation is the plain one, bit for bit.
+    let x = [12.0f32, 0.3, 0.1, -0.2];
+    assert_eq!(m.rbf.eval_split(&x, &x).to_bits(), m.rbf.eval(&x).to_bits());
 }
 
 #[test]
