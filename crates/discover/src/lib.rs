@@ -1,0 +1,221 @@
+//! The discovery loop of tcomp: compare a model with the measurements, see where it fails, be told
+//! which physical effect is most likely missing (with the evidence), add it with one line, and
+//! watch the error fall.
+//!
+//! Modules: [`segments`] (where it fails: warm-up, holds, ramps, bands, worst intervals),
+//! [`candidates`] (which effects could be missing, with physical names and ready expressions),
+//! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual),
+//! [`evidence`] (the grouped-prior evidence arithmetic under it), [`verdict`] (the stated
+//! criterion), [`report`] (self-contained HTML with SVG plots), [`demo`] (the built-in narrative).
+//!
+//! ```no_run
+//! use tcomp_discover::{DiagnoseOptions, diagnose};
+//! let bytes = tcomp_train::blob_io::read("m.tcm".as_ref()).unwrap();
+//! let model = tcomp_train::blob_io::decode("m.tcm".as_ref(), &bytes).unwrap();
+//! let data = tcomp_train::Dataset::load("train.csv".as_ref()).unwrap();
+//! let a = diagnose(&model, &data, None, &DiagnoseOptions::default()).unwrap();
+//! println!("{}", a.diagnosis.verdict_text);
+//! ```
+#![forbid(unsafe_code)]
+
+pub mod candidates;
+pub mod demo;
+pub mod error;
+pub mod evidence;
+pub mod report;
+pub mod score;
+pub mod segments;
+pub mod verdict;
+
+pub use error::{DiscoverError, Result};
+pub use verdict::{Criterion, Verdict};
+
+use serde::Serialize;
+use std::time::Instant;
+use tcomp_core::Model;
+use tcomp_train::features::{F, FeatureSpec, N};
+use tcomp_train::metrics::{self, Run};
+use tcomp_train::rbf64::C;
+use tcomp_train::{Dataset, Roles};
+
+/// A decoded model blob as the host reads it.
+pub type HostModel<'a> = Model<'a, C, F, N>;
+
+/// What diagnosis needs to know about a model: its program's source and column roles.
+#[derive(Clone, Debug)]
+pub struct ModelInfo {
+    /// Signals and features.
+    pub spec: FeatureSpec,
+    /// Column roles.
+    pub roles: Roles,
+    /// Output unit.
+    pub unit: String,
+}
+
+/// The source of a model's program and its roles.
+pub fn model_info(model: &HostModel<'_>) -> ModelInfo {
+    ModelInfo {
+        spec: FeatureSpec {
+            signals: model
+                .program
+                .signals
+                .iter()
+                .map(|s| format!("{} = {}", s.name, s.expr))
+                .collect(),
+            features: model
+                .program
+                .feature_exprs
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+        },
+        roles: Roles::of_model(model),
+        unit: model.meta.unit.to_string(),
+    }
+}
+
+/// Options of [`diagnose`].
+#[derive(Clone, Debug, Default)]
+pub struct DiagnoseOptions {
+    /// Scoring.
+    pub score: score::ScoreOptions,
+    /// Verdict thresholds.
+    pub criterion: Criterion,
+    /// Column for segment detection (default: the program's first input).
+    pub temperature: Option<String>,
+    /// Override of the model's roles (reference column or value).
+    pub roles: Option<Roles>,
+}
+
+/// The model as given.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelSummary {
+    /// Signals.
+    pub signals: Vec<String>,
+    /// Features.
+    pub features: Vec<String>,
+    /// Target column.
+    pub target: String,
+    /// Unit.
+    pub unit: String,
+}
+
+/// Everything `tcomp diagnose` reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct Diagnosis {
+    /// "missing_effect" or "none".
+    pub verdict: Verdict,
+    /// The verdict in one sentence.
+    pub verdict_text: String,
+    /// The criterion in one sentence.
+    pub criterion: String,
+    /// Its thresholds.
+    pub thresholds: Criterion,
+    /// The model diagnosed.
+    pub model: ModelSummary,
+    /// Figures of the model's features under the scoring machinery.
+    pub base: score::BaseFigures,
+    /// Candidates, best first.
+    pub candidates: Vec<score::Scored>,
+    /// Candidates not scored, with the reason.
+    pub skipped: Vec<score::Skipped>,
+    /// Candidate fits computed (members of all families).
+    pub fits: usize,
+    /// Segments of the data run (residual of the model as given).
+    pub segments: Vec<segments::SegmentRow>,
+    /// Worst intervals of the data run.
+    pub worst_intervals: Vec<segments::Interval>,
+    /// Segments of the verification run.
+    pub verify_segments: Vec<segments::SegmentRow>,
+    /// Worst intervals of the verification run.
+    pub verify_worst_intervals: Vec<segments::Interval>,
+    /// Wall time of the diagnosis (s).
+    pub elapsed_s: f64,
+}
+
+/// A diagnosis with what the report needs besides it.
+pub struct Analysis {
+    /// The diagnosis.
+    pub diagnosis: Diagnosis,
+    /// The scoring state (binned residuals, candidate features).
+    pub prepared: score::Prepared,
+    /// The model run over the data.
+    pub run: Run,
+    /// The model run over the verification data.
+    pub verify_run: Option<Run>,
+}
+
+/// Diagnoses `model` on `data` (normally its training run), with held-out figures on `verify`
+/// when given (else on contiguous blocks of `data`).
+pub fn diagnose(
+    model: &HostModel<'_>,
+    data: &Dataset,
+    verify: Option<&Dataset>,
+    opts: &DiagnoseOptions,
+) -> Result<Analysis> {
+    let t0 = Instant::now();
+    let info = model_info(model);
+    let roles = opts.roles.clone().unwrap_or(info.roles);
+    let temp = opts.temperature.as_deref();
+    let run = metrics::run_model(model, data, &roles, temp, opts.score.gap_s)?;
+    let verify_run = verify
+        .map(|v| metrics::run_model(model, v, &roles, temp, opts.score.gap_s))
+        .transpose()?;
+    let segs = segments::table(&run);
+    let worst = segments::worst_intervals(&run, &segs);
+    let (vsegs, vworst) = match &verify_run {
+        Some(r) => {
+            let s = segments::table(r);
+            let w = segments::worst_intervals(r, &s);
+            (s, w)
+        }
+        None => (Vec::new(), Vec::new()),
+    };
+    let prepared = score::prepare(&info.spec, &roles, data, verify, &opts.score)?;
+    let mut exclude = vec![roles.time.as_str(), roles.target.as_str()];
+    if let Some(r) = &roles.reference {
+        exclude.push(r.as_str());
+    }
+    let src = candidates::sources(data, &exclude, &info.spec.signals);
+    let families = candidates::generate(&src, &info.spec.features);
+    let fits = families.iter().map(|f| f.members.len()).sum();
+    let (mut cands, mut skipped) = score::score(&prepared, &families);
+    for e in &src.environment {
+        skipped.push(score::Skipped {
+            expression: e.clone(),
+            effect: format!("chamber/ambient temperature {e}"),
+            reason: "the environment's temperature is not available to the firmware in flight; \
+                     heat flow from it is what rates and lags of the sensor's thermometers describe"
+                .into(),
+        });
+    }
+    opts.criterion.apply(&prepared.figures, &mut cands);
+    let (verdict, verdict_text) = verdict::decide(&cands);
+    let diagnosis = Diagnosis {
+        verdict,
+        verdict_text,
+        criterion: opts.criterion.text(),
+        thresholds: opts.criterion.clone(),
+        model: ModelSummary {
+            signals: info.spec.signals.clone(),
+            features: info.spec.features.clone(),
+            target: roles.target.clone(),
+            unit: info.unit,
+        },
+        base: prepared.figures.clone(),
+        candidates: cands,
+        skipped,
+        fits,
+        segments: segs,
+        worst_intervals: worst,
+        verify_segments: vsegs,
+        verify_worst_intervals: vworst,
+        elapsed_s: t0.elapsed().as_secs_f64(),
+    };
+    Ok(Analysis {
+        diagnosis,
+        prepared,
+        run,
+        verify_run,
+    })
+}

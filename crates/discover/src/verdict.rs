@@ -1,0 +1,130 @@
+//! The verdict: a named missing effect, or "no significant missing effect", by a stated criterion.
+//!
+//! Why a criterion with three legs: a tool that always finds something is worse than none. Each leg
+//! guards against a different way of fooling oneself.
+//! 1. **Evidence:** Δ log evidence ≥ `min_delta_log_evidence` (default 5, "strong" on Jeffreys'
+//!    scale) on binned training data — the candidate is worth its extra parameter there.
+//! 2. **Held-out improvement:** the held-out residual falls by at least `min_improvement_pct`
+//!    (default 5 %) — the structure is still there on data the fit has not seen (drift that the
+//!    training run happened to share does not survive this).
+//! 3. **Above the noise floor:** the held-out error removed, √(before² − after²), is at least
+//!    `min_removed_vs_floor` (default 0.5) times the noise floor estimated from the held-out
+//!    residual — an effect smaller than that cannot be told from noise, and a model that already
+//!    holds the physics sits at the floor with nothing left to remove.
+
+use crate::score::{BaseFigures, Scored};
+use serde::Serialize;
+
+/// The thresholds of the verdict.
+#[derive(Clone, Debug, Serialize)]
+pub struct Criterion {
+    /// Minimum Δ log evidence.
+    pub min_delta_log_evidence: f64,
+    /// Minimum held-out improvement (%).
+    pub min_improvement_pct: f64,
+    /// Minimum held-out error removed, as a multiple of the noise floor estimate.
+    pub min_removed_vs_floor: f64,
+}
+
+impl Default for Criterion {
+    fn default() -> Self {
+        Self {
+            min_delta_log_evidence: 5.0,
+            min_improvement_pct: 5.0,
+            min_removed_vs_floor: 0.5,
+        }
+    }
+}
+
+impl Criterion {
+    /// The criterion in one sentence.
+    pub fn text(&self) -> String {
+        format!(
+            "a candidate is a missing effect when (1) Δ log evidence ≥ {} on binned training data, \
+             (2) the held-out residual falls by ≥ {} %, and (3) the held-out error it removes, \
+             √(before² − after²), is ≥ {}× the noise floor estimated from the held-out residual",
+            self.min_delta_log_evidence, self.min_improvement_pct, self.min_removed_vs_floor
+        )
+    }
+
+    /// Marks each candidate as passing or not (with the reasons) and sorts: passing first, then by
+    /// Δ log evidence.
+    pub fn apply(&self, base: &BaseFigures, cands: &mut [Scored]) {
+        for c in cands.iter_mut() {
+            let mut fails = Vec::new();
+            if c.delta_log_evidence < self.min_delta_log_evidence {
+                fails.push(format!(
+                    "Δ log evidence {:.1} < {}",
+                    c.delta_log_evidence, self.min_delta_log_evidence
+                ));
+            }
+            if c.improvement_pct < self.min_improvement_pct {
+                fails.push(format!(
+                    "held-out improvement {:.1} % < {} %",
+                    c.improvement_pct, self.min_improvement_pct
+                ));
+            }
+            let removed = (c.residual_std_before.powi(2) - c.residual_std_after.powi(2))
+                .max(0.0)
+                .sqrt();
+            let need = self.min_removed_vs_floor * base.noise_floor_estimate;
+            if removed < need {
+                fails.push(format!(
+                    "removes {removed:.3e} of held-out error < {need:.3e} ({}× noise floor {:.3e})",
+                    self.min_removed_vs_floor, base.noise_floor_estimate
+                ));
+            }
+            c.passes = fails.is_empty();
+            c.fails = fails;
+        }
+        cands.sort_by(|a, b| {
+            b.passes
+                .cmp(&a.passes)
+                .then(b.delta_log_evidence.total_cmp(&a.delta_log_evidence))
+        });
+    }
+}
+
+/// "missing_effect" or "none".
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// A candidate cleared the criterion.
+    MissingEffect,
+    /// None did.
+    None,
+}
+
+/// The verdict for sorted candidates, with a sentence.
+pub fn decide(cands: &[Scored]) -> (Verdict, String) {
+    match cands.first() {
+        Some(c) if c.passes => (
+            Verdict::MissingEffect,
+            format!(
+                "missing effect: {} — add {} (Δ log evidence {:+.1}; held-out residual {:.3e} → {:.3e}, {:.1} % lower)",
+                c.effect,
+                c.expressions
+                    .iter()
+                    .map(|e| format!("--feature '{e}'"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                c.delta_log_evidence,
+                c.residual_std_before,
+                c.residual_std_after,
+                c.improvement_pct
+            ),
+        ),
+        Some(c) => (
+            Verdict::None,
+            format!(
+                "no significant missing effect: no candidate clears the criterion (closest: {}, {})",
+                c.effect,
+                c.fails.join("; ")
+            ),
+        ),
+        None => (
+            Verdict::None,
+            "no significant missing effect: no candidate could be scored".into(),
+        ),
+    }
+}

@@ -1,0 +1,174 @@
+//! Each simulated effect hidden in turn from the starting model: the diagnosis must rank it first
+//! and say so, and adding the named feature must bring the held-out residual (100 s bins) within
+//! 1.2× the noise floor. With nothing hidden the verdict must be "none".
+//!
+//! Runs: 1 s rows of the RLG/QMA chamber profiles (train ≈ 6.1 h, verify ≈ 5.7 h), fitted on 30 s
+//! bins by the trainer, scored on 60 s bins.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use tcomp_discover::candidates::EffectKind as Kind;
+use tcomp_discover::demo::{evaluate, fit_features, simulated};
+use tcomp_discover::{DiagnoseOptions, Verdict, diagnose};
+use tcomp_sim::{EffectKind, SensorKind, presets};
+
+struct Outcome {
+    verdict: Verdict,
+    top: Option<(Kind, Vec<String>)>,
+    text: String,
+    after_over_floor: f64,
+}
+
+fn case(sensor: SensorKind, effects: &[EffectKind], hidden: Option<EffectKind>) -> Outcome {
+    let preset = presets::with_effects(sensor, effects)
+        .unwrap()
+        .with_seed(11);
+    case_preset(preset, hidden)
+}
+
+fn case_preset(preset: tcomp_sim::Preset, hidden: Option<EffectKind>) -> Outcome {
+    let sim = simulated(&preset).unwrap();
+    let truth = &sim.train_truth;
+    let signals: Vec<String> = truth
+        .true_features
+        .signals
+        .iter()
+        .map(|(k, v)| format!("{k} = {v}"))
+        .collect();
+    let hidden_feats: Vec<String> = hidden
+        .and_then(|h| truth.effects.iter().find(|e| e.name == h.name()))
+        .map(|e| e.features.clone())
+        .unwrap_or_default();
+    let base: Vec<String> = truth
+        .true_features
+        .features
+        .iter()
+        .filter(|f| !hidden_feats.contains(f))
+        .cloned()
+        .collect();
+    let fitted = fit_features(&sim.train, truth, &signals, &base).unwrap();
+    let bytes = fitted.model.to_bytes().unwrap();
+    let model = tcomp_train::blob_io::decode("m.tcm".as_ref(), &bytes).unwrap();
+    let a = diagnose(
+        &model,
+        &sim.train,
+        Some(&sim.verify),
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    let d = &a.diagnosis;
+    let floor = sim.verify_truth.noise.std_100s;
+    let mut text = format!(
+        "hidden {:?}: base {:?}; verdict {:?}: {}\n  base held-out {:.4e}, floor est {:.4e}, true floor {:.4e}, {} fits in {:.2} s\n",
+        hidden.map(|h| h.name()),
+        base,
+        d.verdict,
+        d.verdict_text,
+        d.base.heldout_residual_std,
+        d.base.noise_floor_estimate,
+        floor,
+        d.fits,
+        d.elapsed_s
+    );
+    for c in d.candidates.iter().take(5) {
+        text += &format!(
+            "  {:<60} dlnE {:+9.1} after {:.4e} ({:+.1} %) {}\n",
+            c.effect,
+            c.delta_log_evidence,
+            c.residual_std_after,
+            c.improvement_pct,
+            c.fails.join("; ")
+        );
+    }
+    let top = d
+        .candidates
+        .first()
+        .map(|c| (c.kind, c.expressions.clone()));
+    let mut after_over_floor = f64::NAN;
+    if let (Verdict::MissingEffect, Some((_, exprs))) = (d.verdict, &top) {
+        let mut feats = base.clone();
+        feats.extend(exprs.iter().cloned());
+        let refit = fit_features(&sim.train, truth, &signals, &feats).unwrap();
+        let ev = evaluate(&refit, &sim.verify).unwrap();
+        after_over_floor = ev.binned.residual_std / floor;
+        text += &format!(
+            "  after adding {exprs:?}: held-out {:.4e} = {:.2}× floor\n",
+            ev.binned.residual_std, after_over_floor
+        );
+    }
+    println!("{text}");
+    Outcome {
+        verdict: d.verdict,
+        top,
+        text,
+        after_over_floor,
+    }
+}
+
+fn check_found(o: &Outcome, kind: Kind) {
+    assert_eq!(o.verdict, Verdict::MissingEffect, "{}", o.text);
+    assert_eq!(o.top.as_ref().map(|t| t.0), Some(kind), "{}", o.text);
+    assert!(o.after_over_floor <= 1.2, "{}", o.text);
+}
+
+use EffectKind::*;
+
+#[test]
+fn hidden_rate() {
+    let o = case(SensorKind::Ifog, &[Poly, Rate], Some(Rate));
+    check_found(&o, Kind::Rate);
+}
+
+#[test]
+fn hidden_shupe() {
+    let p = tcomp_discover::demo::demo_preset(11).unwrap();
+    let o = case_preset(p, Some(Shupe));
+    check_found(&o, Kind::Shupe);
+}
+
+#[test]
+fn hidden_gradient() {
+    let o = case(SensorKind::Rlg, &[Poly, Rate, Gradient], Some(Gradient));
+    check_found(&o, Kind::Gradient);
+}
+
+#[test]
+fn hidden_lagged_element() {
+    let o = case(
+        SensorKind::Ifog,
+        &[Poly, Rate, LaggedElement],
+        Some(LaggedElement),
+    );
+    check_found(&o, Kind::LaggedElement);
+}
+
+#[test]
+fn hidden_hysteresis() {
+    let o = case(
+        SensorKind::Ifog,
+        &[Poly, Rate, Hysteresis],
+        Some(Hysteresis),
+    );
+    check_found(&o, Kind::Hysteresis);
+}
+
+#[test]
+fn hidden_supply_voltage() {
+    let o = case(
+        SensorKind::Ifog,
+        &[Poly, Rate, SupplyVoltage],
+        Some(SupplyVoltage),
+    );
+    check_found(&o, Kind::NonThermal);
+}
+
+#[test]
+fn nothing_hidden_gives_none() {
+    let o = case(SensorKind::Ifog, &[Poly, Rate, Shupe], None);
+    assert_eq!(o.verdict, Verdict::None, "{}", o.text);
+}
+
+#[test]
+fn nothing_hidden_rlg_gives_none() {
+    let o = case(SensorKind::Rlg, &[Poly, Rate, Gradient], None);
+    assert_eq!(o.verdict, Verdict::None, "{}", o.text);
+}
