@@ -41,6 +41,8 @@ pub const STUCK_SAMPLES: u16 = 400;
 pub const MAX_THERMOMETERS: usize = 12;
 /// Most pulse counters a configuration reads.
 pub const MAX_COUNTERS: usize = 6;
+/// Most channels a configuration has.
+pub const MAX_CHANNELS: usize = 6;
 
 /// The status word of one output: the core's [`tcomp_core::Status`] bits plus the loop's own.
 pub mod status {
@@ -174,27 +176,28 @@ struct ThermState {
     error: bool,
 }
 
-/// The loop for a configuration of `K` channels.
-pub struct App<'a, const K: usize> {
-    config: &'static [ChannelConfig; K],
-    models: [Option<FwModel<'a>>; K],
+/// The loop for a configuration of up to [`MAX_CHANNELS`] channels (one type for every
+/// configuration, so the firmware carries one copy of the code).
+pub struct App<'a> {
+    config: &'static [ChannelConfig],
+    models: [Option<FwModel<'a>>; MAX_CHANNELS],
     /// For each channel, model input `i` reads thermometer `map[i]`.
-    input_map: [[u8; MAX_INPUTS]; K],
-    n_inputs: [u8; K],
-    channels: [FwChannel; K],
+    input_map: [[u8; MAX_INPUTS]; MAX_CHANNELS],
+    n_inputs: [u8; MAX_CHANNELS],
+    channels: [FwChannel; MAX_CHANNELS],
     therms: [ThermState; MAX_THERMOMETERS],
     missed: [u16; MAX_COUNTERS],
 }
 
-impl<'a, const K: usize> App<'a, K> {
-    /// The loop with no models yet.
-    pub fn new(config: &'static [ChannelConfig; K]) -> Self {
+impl<'a> App<'a> {
+    /// The loop with no models yet; channels past [`MAX_CHANNELS`] are ignored.
+    pub fn new(config: &'static [ChannelConfig]) -> Self {
         Self {
-            config,
-            models: [const { None }; K],
-            input_map: [[0; MAX_INPUTS]; K],
-            n_inputs: [0; K],
-            channels: [const { Channel::new(PERIOD_S) }; K],
+            config: config.get(..MAX_CHANNELS).unwrap_or(config),
+            models: [const { None }; MAX_CHANNELS],
+            input_map: [[0; MAX_INPUTS]; MAX_CHANNELS],
+            n_inputs: [0; MAX_CHANNELS],
+            channels: [const { Channel::new(PERIOD_S) }; MAX_CHANNELS],
             therms: [ThermState::default(); MAX_THERMOMETERS],
             missed: [0; MAX_COUNTERS],
         }
@@ -202,14 +205,12 @@ impl<'a, const K: usize> App<'a, K> {
 
     /// Loads every channel's model from the image bytes; returns each channel's outcome. A channel
     /// that fails keeps running without a model.
-    pub fn load(&mut self, image: &'a [u8]) -> [Result<(), LoadError>; K] {
+    pub fn load(&mut self, image: &'a [u8]) -> [Result<(), LoadError>; MAX_CHANNELS] {
         let image = Image::parse(image);
         core::array::from_fn(|k| {
             let loaded = self.load_channel(k, image);
-            if loaded.is_err() {
-                if let Some(m) = self.models.get_mut(k) {
-                    *m = None;
-                }
+            if let (Err(_), Some(m)) = (&loaded, self.models.get_mut(k)) {
+                *m = None;
             }
             loaded
         })
@@ -248,16 +249,17 @@ impl<'a, const K: usize> App<'a, K> {
     }
 
     /// The configuration.
-    pub fn config(&self) -> &'static [ChannelConfig; K] {
+    pub fn config(&self) -> &'static [ChannelConfig] {
         self.config
     }
 
-    /// One period: read all sensors, step all channels, write one record per channel.
+    /// One period: read all sensors, step all channels, write one record per channel into `out`
+    /// (as many as both have).
     pub fn sample<T: Thermometer, P: PulseCounter>(
         &mut self,
         thermometers: &mut [T],
         counters: &mut [P],
-        out: &mut [Record; K],
+        out: &mut [Record],
     ) {
         for (t, s) in thermometers.iter_mut().zip(self.therms.iter_mut()) {
             match t.read_celsius() {
@@ -292,7 +294,7 @@ impl<'a, const K: usize> App<'a, K> {
                 Err(_) => *missed = missed.saturating_add(1),
             }
         }
-        for (k, rec) in out.iter_mut().enumerate() {
+        for (k, rec) in out.iter_mut().take(self.config.len()).enumerate() {
             *rec = self.step_channel(k, &pulses);
         }
     }

@@ -150,7 +150,7 @@ pub fn build<const K: usize>(
     let mut bytes = inputs.bytes(config_code, K);
     let outputs = {
         let v = Vector::parse(&bytes).map_err(|e| anyhow::anyhow!("vector: {e:?}"))?;
-        let mut app = App::<K>::new(config);
+        let mut app = App::new(config);
         for (c, r) in config.iter().zip(app.load(image)) {
             if let Err(e) = r {
                 eprintln!("host: channel {}: no model ({e:?})", c.name);
