@@ -26,6 +26,14 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Pack one model blob per firmware channel into the image flashed at 0x003F0000.
     Image(cmd::image::Args),
+    /// Where a model fails and which physical effect is most likely missing (with the evidence).
+    Diagnose(cmd::diagnose::Args),
+    /// Compare two models on a run, overall and per segment.
+    Compare(cmd::compare::Args),
+    /// Write a self-contained HTML report with SVG plots.
+    Report(cmd::report::Args),
+    /// The discovery loop on a simulated IFOG: fit, diagnose, add the missing term, refit.
+    Demo(cmd::demo::Args),
 }
 
 fn main() -> anyhow::Result<()> {
@@ -36,5 +44,9 @@ fn main() -> anyhow::Result<()> {
         Command::Eval(args) => cmd::eval::run(&args),
         Command::Simulate(args) => cmd::simulate::run(&args),
         Command::Image(args) => cmd::image::run(&args),
+        Command::Diagnose(args) => cmd::diagnose::run(&args),
+        Command::Compare(args) => cmd::compare::run(&args),
+        Command::Report(args) => cmd::report::run(&args),
+        Command::Demo(args) => cmd::demo::run(&args),
     }
 }

@@ -12,8 +12,10 @@
 //!   own prior precision; all weights and α, β are re-estimated by the evidence iteration. A column
 //!   that explains nothing is switched off (α → ∞) and its Δ log evidence tends to 0, so the
 //!   comparison is between models that differ by the candidate alone.
-//! * **Collinear candidates are refused,** not scored: a column the base design already spans
-//!   (1 − R² < 1e-4) adds no information, whatever its name.
+//! * **Collinear candidates are refused,** not scored: a column the model's features already span
+//!   linearly (1 − R² < 1e-4 against bias + features) adds no information, whatever its name. A
+//!   candidate the Gaussians can mimic in-sample (T·dT/dt on a run with one ramp rate) is still
+//!   scored: its evidence gain is then small, and the held-out residual decides.
 //! * **Held-out residual** on `--verify` (bins of `heldout_bin_s`, default 100 s) or, without one,
 //!   on `folds` contiguous blocks of the training run, each predicted from the others with the
 //!   converged hyperparameters.
@@ -84,6 +86,7 @@ pub struct Prepared {
     ys: f64,
     phi: DMatrix<f64>,
     groups: Vec<usize>,
+    n_linear: usize,
     base: GroupFit,
     heldout: HeldOut,
     /// Base figures.
@@ -342,6 +345,7 @@ pub fn prepare(
         ys,
         phi,
         groups,
+        n_linear: d,
         base,
         heldout,
         figures: BaseFigures::default(),
@@ -487,15 +491,18 @@ struct MemberScore {
 
 fn score_member(p: &Prepared, c: &Candidate) -> std::result::Result<MemberScore, String> {
     let (cols, vcols) = p.standardised(&c.expressions).map_err(|e| e.to_string())?;
-    // Refuse columns the base design already spans.
+    // Refuse columns the model's features already span linearly (bias + linear columns). The
+    // Gaussians are left out on purpose: a product or square of existing features is expressible
+    // by them in-sample, yet as an explicit feature it changes how the model extrapolates.
+    let lin = p.phi.columns(0, p.n_linear + 1).into_owned();
     for (e, col) in c.expressions.iter().zip(&cols) {
         let cv = DVector::from_column_slice(col);
-        let g = p.phi.tr_mul(&p.phi) + DMatrix::identity(p.phi.ncols(), p.phi.ncols()) * 1e-9;
+        let g = lin.tr_mul(&lin) + DMatrix::identity(lin.ncols(), lin.ncols()) * 1e-9;
         let b = g
             .cholesky()
-            .map(|ch| ch.solve(&p.phi.tr_mul(&cv)))
+            .map(|ch| ch.solve(&lin.tr_mul(&cv)))
             .ok_or("singular base design")?;
-        let r = &cv - &p.phi * b;
+        let r = &cv - &lin * b;
         let unexplained = r.dot(&r) / cv.dot(&cv).max(1e-300);
         if unexplained < 1e-4 {
             return Err(format!(

@@ -3,7 +3,11 @@
 //! Why a criterion with three legs: a tool that always finds something is worse than none. Each leg
 //! guards against a different way of fooling oneself.
 //! 1. **Evidence:** Δ log evidence ≥ `min_delta_log_evidence` (default 5, "strong" on Jeffreys'
-//!    scale) on binned training data — the candidate is worth its extra parameter there.
+//!    scale) on binned training data — the candidate is worth its extra parameter there. Or, when
+//!    the training run cannot tell the candidate from what the model's Gaussians mimic in-sample
+//!    (T·dT/dt on a run with a single ramp rate), Δ log evidence ≥ 0 together with a held-out
+//!    improvement of at least `strong_improvement_pct` (default 20 %): data the fit has not seen
+//!    can tell them apart.
 //! 2. **Held-out improvement:** the held-out residual falls by at least `min_improvement_pct`
 //!    (default 5 %) — the structure is still there on data the fit has not seen (drift that the
 //!    training run happened to share does not survive this).
@@ -22,6 +26,8 @@ pub struct Criterion {
     pub min_delta_log_evidence: f64,
     /// Minimum held-out improvement (%).
     pub min_improvement_pct: f64,
+    /// Held-out improvement (%) that stands in for the evidence threshold when Δ log evidence ≥ 0.
+    pub strong_improvement_pct: f64,
     /// Minimum held-out error removed, as a multiple of the noise floor estimate.
     pub min_removed_vs_floor: f64,
 }
@@ -31,6 +37,7 @@ impl Default for Criterion {
         Self {
             min_delta_log_evidence: 5.0,
             min_improvement_pct: 5.0,
+            strong_improvement_pct: 20.0,
             min_removed_vs_floor: 0.5,
         }
     }
@@ -40,10 +47,14 @@ impl Criterion {
     /// The criterion in one sentence.
     pub fn text(&self) -> String {
         format!(
-            "a candidate is a missing effect when (1) Δ log evidence ≥ {} on binned training data, \
-             (2) the held-out residual falls by ≥ {} %, and (3) the held-out error it removes, \
-             √(before² − after²), is ≥ {}× the noise floor estimated from the held-out residual",
-            self.min_delta_log_evidence, self.min_improvement_pct, self.min_removed_vs_floor
+            "a candidate is a missing effect when (1) Δ log evidence ≥ {} on binned training data \
+             (or ≥ 0 with a held-out improvement ≥ {} %), (2) the held-out residual falls by ≥ {} %, \
+             and (3) the held-out error it removes, √(before² − after²), is ≥ {}× the noise floor \
+             estimated from the held-out residual",
+            self.min_delta_log_evidence,
+            self.strong_improvement_pct,
+            self.min_improvement_pct,
+            self.min_removed_vs_floor
         )
     }
 
@@ -52,10 +63,12 @@ impl Criterion {
     pub fn apply(&self, base: &BaseFigures, cands: &mut [Scored]) {
         for c in cands.iter_mut() {
             let mut fails = Vec::new();
-            if c.delta_log_evidence < self.min_delta_log_evidence {
+            let strong =
+                c.delta_log_evidence >= 0.0 && c.improvement_pct >= self.strong_improvement_pct;
+            if c.delta_log_evidence < self.min_delta_log_evidence && !strong {
                 fails.push(format!(
-                    "Δ log evidence {:.1} < {}",
-                    c.delta_log_evidence, self.min_delta_log_evidence
+                    "Δ log evidence {:.1} < {} (and not ≥ 0 with ≥ {} % held-out improvement)",
+                    c.delta_log_evidence, self.min_delta_log_evidence, self.strong_improvement_pct
                 ));
             }
             if c.improvement_pct < self.min_improvement_pct {

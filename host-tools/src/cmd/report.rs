@@ -1,0 +1,78 @@
+//! `tcomp report --model MODEL [--model MODEL2 ...] --data FILE --out report.html`: one
+//! self-contained HTML file with SVG plots, the diagnosis of the first model, and the figures.
+use clap::Args as ClapArgs;
+use std::path::PathBuf;
+use tcomp_discover::report::{ModelRun, ReportInput, render};
+use tcomp_train::Dataset;
+
+/// Arguments of `tcomp report`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// Model blobs (the first is diagnosed; others are compared with it).
+    #[arg(long, required = true)]
+    pub model: Vec<PathBuf>,
+    /// The run to show.
+    #[arg(long)]
+    pub data: PathBuf,
+    /// A held-out run for the diagnosis.
+    #[arg(long)]
+    pub verify: Option<PathBuf>,
+    /// Output HTML file.
+    #[arg(long, default_value = "report.html")]
+    pub out: PathBuf,
+    /// Skip the diagnosis (plots and figures only).
+    #[arg(long)]
+    pub no_diagnosis: bool,
+}
+
+/// Runs the command.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let first = args
+        .model
+        .first()
+        .ok_or_else(|| anyhow::anyhow!("give at least one --model"))?;
+    let data = Dataset::load(&args.data)?;
+    let bytes = tcomp_train::blob_io::read(first)?;
+    let m0 = tcomp_train::blob_io::decode(first, &bytes)?;
+    let temp = m0.program.inputs.first().map(|s| s.to_string());
+    let analysis = if args.no_diagnosis {
+        None
+    } else {
+        let d = super::diagnose::Args {
+            model: first.clone(),
+            data: args.data.clone(),
+            verify: args.verify.clone(),
+            reference_value: None,
+            temperature: temp.clone(),
+            bin: 60.0,
+            min_evidence: 5.0,
+            min_improvement: 5.0,
+            top: 10,
+            json: false,
+        };
+        Some(super::diagnose::analyse(&d)?.0)
+    };
+    let mut models = Vec::new();
+    for p in &args.model {
+        models.push(ModelRun {
+            name: p
+                .file_name()
+                .map_or_else(|| p.display().to_string(), |f| f.to_string_lossy().into()),
+            run: super::compare::run_blob(p, &data, temp.as_deref())?,
+        });
+    }
+    let html = render(&ReportInput {
+        title: format!("tcomp report: {}", args.data.display()),
+        data_name: args.data.display().to_string(),
+        unit: m0.meta.unit.to_string(),
+        models,
+        analysis: analysis.as_ref(),
+        noise_floor: None,
+    })?;
+    tcomp_train::blob_io::write_atomic(&args.out, html.as_bytes())?;
+    println!("wrote {}", args.out.display());
+    if let Some(a) = &analysis {
+        println!("{}", a.diagnosis.verdict_text);
+    }
+    Ok(())
+}
