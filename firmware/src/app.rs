@@ -43,6 +43,12 @@ pub const MAX_THERMOMETERS: usize = 12;
 pub const MAX_COUNTERS: usize = 6;
 /// Most channels a configuration has.
 pub const MAX_CHANNELS: usize = 6;
+/// Each channel refreshes its model correction every this many samples (staggered: channel k on
+/// sample k of each interval) and holds it in between; its feature program still runs every sample.
+/// At 200 Hz that is a 33 Hz correction update — thermal features change over seconds to hours — and
+/// one RBF evaluation per loop iteration instead of six. Set to 1 to evaluate every channel every
+/// sample (see BENCHMARKS.md for both instruction counts).
+pub const MODEL_INTERVAL: u16 = MAX_CHANNELS as u16;
 
 /// The status word of one output: the core's [`tcomp_core::Status`] bits plus the loop's own.
 pub mod status {
@@ -197,7 +203,9 @@ impl<'a> App<'a> {
             models: [const { None }; MAX_CHANNELS],
             input_map: [[0; MAX_INPUTS]; MAX_CHANNELS],
             n_inputs: [0; MAX_CHANNELS],
-            channels: [const { Channel::new(PERIOD_S) }; MAX_CHANNELS],
+            channels: core::array::from_fn(|k| {
+                Channel::new(PERIOD_S).with_model_interval(MODEL_INTERVAL, k as u16)
+            }),
             therms: [ThermState::default(); MAX_THERMOMETERS],
             missed: [0; MAX_COUNTERS],
         }

@@ -23,7 +23,9 @@ use serde::{Deserialize, Serialize};
 pub const MAGIC: [u8; 4] = *b"TCMB";
 /// The blob format version this build reads and writes.
 pub const FORMAT_VERSION: u16 = 1;
-const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+/// Bitwise CRC (no 1 KiB lookup table): a blob is checked once at load, so flash matters more
+/// than the microseconds.
+const CRC: crc::Crc<u32, crc::NoTable> = crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
 
 /// The instrument a model compensates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

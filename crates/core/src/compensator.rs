@@ -13,6 +13,13 @@
 //!   to the range widened by one span on each side, so a trend keeps extrapolating somewhat beyond
 //!   the trained envelope (what the linear term is for) but never without bound;
 //! * no model: the raw value passes through, flagged [`Status::NO_MODEL`].
+//!
+//! A channel may refresh its correction less often than it samples
+//! ([`Channel::with_model_interval`]): thermal features move on time scales of seconds to hours, so
+//! a correction evaluated every k-th sample and held in between differs from the per-sample one by
+//! far less than the sensor noise, while the feature program still runs every sample (rates and lags
+//! stay exact). With several channels the refreshes are staggered by `phase`, so one loop iteration
+//! evaluates one model instead of all of them. The default is every sample.
 
 use crate::blob::Model;
 use crate::stream::ProgramState;
@@ -89,6 +96,14 @@ pub struct Channel<const N: usize, const F: usize> {
     have_features: bool,
     pending_dt: f32,
     period_s: f32,
+    /// Refresh the correction every this many samples (≥ 1).
+    model_interval: u16,
+    /// On which sample of the interval.
+    model_phase: u16,
+    /// Samples since the interval started.
+    tick: u16,
+    /// The correction last evaluated, and whether there is one.
+    held: Option<f32>,
 }
 
 impl<const N: usize, const F: usize> Channel<N, F> {
@@ -100,12 +115,27 @@ impl<const N: usize, const F: usize> Channel<N, F> {
             have_features: false,
             pending_dt: 0.0,
             period_s,
+            model_interval: 1,
+            model_phase: 0,
+            tick: 0,
+            held: None,
         }
     }
 
-    /// Forgets all history (after a gap, or when a new model is loaded).
+    /// The same channel refreshing its correction every `interval` samples (at least 1), on sample
+    /// `phase % interval` of each interval, holding it in between (see the module doc).
+    #[must_use]
+    pub const fn with_model_interval(mut self, interval: u16, phase: u16) -> Self {
+        let interval = if interval == 0 { 1 } else { interval };
+        self.model_interval = interval;
+        self.model_phase = phase % interval;
+        self
+    }
+
+    /// Forgets all history (after a gap, or when a new model is loaded); keeps the period and the
+    /// model interval.
     pub fn reset(&mut self) {
-        *self = Self::new(self.period_s);
+        *self = Self::new(self.period_s).with_model_interval(self.model_interval, self.model_phase);
     }
 
     /// The last good (unclamped) features.
@@ -183,7 +213,20 @@ impl<const N: usize, const F: usize> Channel<N, F> {
                 status = status.with(Status::OUT_OF_RANGE);
             }
         }
-        let correction = model.rbf.eval_split(&x_gauss, &x_linear);
+        let due = self.tick == self.model_phase;
+        self.tick = if self.tick + 1 >= self.model_interval {
+            0
+        } else {
+            self.tick + 1
+        };
+        let correction = match self.held {
+            Some(held) if !due => held,
+            _ => {
+                let c = model.rbf.eval_split(&x_gauss, &x_linear);
+                self.held = Some(c);
+                c
+            }
+        };
         Output {
             compensated: raw - correction,
             correction,

@@ -100,3 +100,46 @@ fn fault_before_any_good_sample_passes_raw() {
         "out-of-range+input-fault"
     );
 }
+
+#[test]
+fn model_interval_refreshes_on_its_phase_and_holds_in_between() {
+    let m = model();
+    let mut every = Channel::<24, 4>::new(0.005);
+    let mut sparse = Channel::<24, 4>::new(0.005).with_model_interval(4, 1);
+    let mut last_fresh = None;
+    for n in 0..400u32 {
+        let (temps, raw) = example_sample(n, 0.005);
+        let a = every.step(Some(&m), &temps, raw);
+        let b = sparse.step(Some(&m), &temps, raw);
+        assert_eq!(a.status, b.status);
+        assert_eq!(
+            every.features(),
+            sparse.features(),
+            "the program runs every sample"
+        );
+        if n == 0 || n % 4 == 1 {
+            assert_eq!(
+                a.correction.to_bits(),
+                b.correction.to_bits(),
+                "sample {n} is a refresh"
+            );
+            last_fresh = Some(a.correction);
+        } else {
+            assert_eq!(
+                Some(b.correction),
+                last_fresh,
+                "sample {n} holds the last refresh"
+            );
+        }
+        // Held for at most 15 ms of a 3 °C/min ramp: far below any sensor noise.
+        assert!((a.correction - b.correction).abs() < 1e-4, "sample {n}");
+    }
+    sparse.reset();
+    let (temps, raw) = example_sample(0, 0.005);
+    let b = sparse.step(Some(&m), &temps, raw);
+    assert_eq!(
+        b.correction,
+        m.rbf.eval(sparse.features()),
+        "reset keeps the interval, starts fresh"
+    );
+}
