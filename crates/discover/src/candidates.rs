@@ -90,6 +90,17 @@ pub struct Sources {
     /// chamber's air temperature cannot fly (and heat flow from the chamber is what a rate or a
     /// lag of the sensor's own thermometer describes).
     pub environment: Vec<String>,
+    /// Other inertial outputs (gyro, accelerometer, magnetometer axes): not candidates, because in
+    /// flight they carry the motion being measured, not only their own thermal drift.
+    pub outputs: Vec<String>,
+}
+
+/// Whether a column reads as an inertial or magnetic output (`gyro*`, `acc*`, `mag*`).
+pub fn is_sensor_output(name: &str) -> bool {
+    let l = name.to_ascii_lowercase();
+    ["gyro", "acc", "mag_", "ref_"]
+        .iter()
+        .any(|k| l.starts_with(k))
 }
 
 /// Whether a temperature column is the environment's (chamber, ambient, air, oven), not the sensor's.
@@ -135,6 +146,10 @@ pub fn sources(data: &Dataset, exclude: &[&str], signals: &[String]) -> Sources 
                 (l.min(*v), h.max(*v))
             });
         if hi - lo <= 1e-12 * (1.0 + hi.abs()) {
+            continue;
+        }
+        if is_sensor_output(name) {
+            s.outputs.push(name.clone());
             continue;
         }
         if is_temperature(name) && is_environment(name) {
@@ -293,6 +308,7 @@ mod tests {
             thermometers: vec!["t_a".into(), "t_b".into(), "t_s".into()],
             inputs: vec!["supply_v".into()],
             environment: Vec::new(),
+            outputs: Vec::new(),
         };
         let f = generate(&src, &["rate(T)".into(), "T".into()]);
         let all: Vec<&Candidate> = f.iter().flat_map(|f| &f.members).collect();

@@ -180,6 +180,13 @@ pub fn diagnose(
     let families = candidates::generate(&src, &info.spec.features);
     let fits = families.iter().map(|f| f.members.len()).sum();
     let (mut cands, mut skipped) = score::score(&prepared, &families);
+    for e in &src.outputs {
+        skipped.push(score::Skipped {
+            expression: e.clone(),
+            effect: format!("other sensor output {e}"),
+            reason: "another inertial output carries the motion in flight, not only drift".into(),
+        });
+    }
     for e in &src.environment {
         skipped.push(score::Skipped {
             expression: e.clone(),
