@@ -1,7 +1,7 @@
 //! `tcomp compare MODEL_A MODEL_B --data FILE [--json]`: before/after, overall and per segment.
 use clap::Args as ClapArgs;
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use tcomp_train::metrics::{self, Run};
 use tcomp_train::{Dataset, EvalReport, Roles};
 
@@ -46,7 +46,7 @@ struct Comparison {
 }
 
 /// Runs a blob over `data` with the segment temperature `temp`.
-pub fn run_blob(path: &PathBuf, data: &Dataset, temp: Option<&str>) -> anyhow::Result<Run> {
+pub fn run_blob(path: &Path, data: &Dataset, temp: Option<&str>) -> anyhow::Result<Run> {
     let bytes = tcomp_train::blob_io::read(path)?;
     let model = tcomp_train::blob_io::decode(path, &bytes)?;
     Ok(metrics::run_model(
@@ -58,7 +58,7 @@ pub fn run_blob(path: &PathBuf, data: &Dataset, temp: Option<&str>) -> anyhow::R
     )?)
 }
 
-fn first_input(path: &PathBuf) -> anyhow::Result<Option<String>> {
+fn first_input(path: &Path) -> anyhow::Result<Option<String>> {
     let bytes = tcomp_train::blob_io::read(path)?;
     let model = tcomp_train::blob_io::decode(path, &bytes)?;
     Ok(model.program.inputs.first().map(|s| s.to_string()))
