@@ -19,6 +19,7 @@
 #![forbid(unsafe_code)]
 
 pub mod candidates;
+pub mod confirm;
 pub mod demo;
 pub mod error;
 pub mod evidence;
@@ -81,6 +82,8 @@ pub struct DiagnoseOptions {
     pub score: score::ScoreOptions,
     /// Verdict thresholds.
     pub criterion: Criterion,
+    /// Refits of the leading candidates.
+    pub confirm: confirm::ConfirmOptions,
     /// Column for segment detection (default: the program's first input).
     pub temperature: Option<String>,
     /// Override of the model's roles (reference column or value).
@@ -129,6 +132,9 @@ pub struct Diagnosis {
     pub verify_segments: Vec<segments::SegmentRow>,
     /// Worst intervals of the verification run.
     pub verify_worst_intervals: Vec<segments::Interval>,
+    /// Held-out residual of the base feature set refitted by the trainer (the "before" of every
+    /// confirmed candidate).
+    pub refit_residual_std_before: f64,
     /// Wall time of the diagnosis (s).
     pub elapsed_s: f64,
 }
@@ -155,7 +161,7 @@ pub fn diagnose(
 ) -> Result<Analysis> {
     let t0 = Instant::now();
     let info = model_info(model);
-    let roles = opts.roles.clone().unwrap_or(info.roles);
+    let roles = opts.roles.clone().unwrap_or_else(|| info.roles.clone());
     let temp = opts.temperature.as_deref();
     let run = metrics::run_model(model, data, &roles, temp, opts.score.gap_s)?;
     let verify_run = verify
@@ -196,6 +202,7 @@ pub fn diagnose(
                 .into(),
         });
     }
+    let refit_before = confirm::confirm(&info, &roles, data, verify, &mut cands, &opts.confirm)?;
     opts.criterion.apply(&prepared.figures, &mut cands);
     let (verdict, verdict_text) = verdict::decide(&cands);
     let diagnosis = Diagnosis {
@@ -207,7 +214,7 @@ pub fn diagnose(
             signals: info.spec.signals.clone(),
             features: info.spec.features.clone(),
             target: roles.target.clone(),
-            unit: info.unit,
+            unit: info.unit.clone(),
         },
         base: prepared.figures.clone(),
         candidates: cands,
@@ -217,6 +224,7 @@ pub fn diagnose(
         worst_intervals: worst,
         verify_segments: vsegs,
         verify_worst_intervals: vworst,
+        refit_residual_std_before: refit_before,
         elapsed_s: t0.elapsed().as_secs_f64(),
     };
     Ok(Analysis {

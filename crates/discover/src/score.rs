@@ -134,12 +134,19 @@ pub struct Scored {
     pub delta_log_evidence: f64,
     /// Δ log evidence of the best member alone.
     pub delta_log_evidence_best: f64,
-    /// Std of the binned held-out residual with the candidate.
+    /// Std of the binned held-out residual with the candidate (the real refit's figure once
+    /// confirmed, else the scoring estimate).
     pub residual_std_after: f64,
     /// Std of the binned held-out residual without it.
     pub residual_std_before: f64,
     /// 100·(1 − after/before) on held-out data.
     pub improvement_pct: f64,
+    /// The scoring's own estimate of `improvement_pct` (centers and widths of the base held fixed).
+    pub scored_improvement_pct: f64,
+    /// The real refit of this candidate ([`crate::confirm`]), when it was among those refitted.
+    pub confirmation: Option<crate::confirm::Confirmation>,
+    /// Why there is no confirmation.
+    pub unconfirmed: Option<String>,
     /// Std of the binned training residual with the candidate.
     pub train_residual_std_after: f64,
     /// Members scored.
@@ -581,6 +588,13 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             } else {
                 0.0
             },
+            scored_improvement_pct: if before > 0.0 {
+                100.0 * (1.0 - best.heldout_std / before)
+            } else {
+                0.0
+            },
+            confirmation: None,
+            unconfirmed: None,
             train_residual_std_after: best.train_std,
             members: mine.len(),
             passes: false,

@@ -15,6 +15,10 @@
 //!    `min_removed_vs_floor` (default 0.5) times the noise floor estimated from the held-out
 //!    residual — an effect smaller than that cannot be told from noise, and a model that already
 //!    holds the physics sits at the floor with nothing left to remove.
+//!
+//! The held-out figures of legs 1 (its held-out path), 2 and 3 are those of a real refit by the
+//! trainer ([`crate::confirm`]): only the few candidates so refitted can be named, so a verdict never
+//! rests on the scoring's fixed-center estimate alone.
 
 use crate::score::{BaseFigures, Scored};
 use serde::Serialize;
@@ -86,6 +90,9 @@ impl Criterion {
                     "removes {removed:.3e} of held-out error < {need:.3e} ({}× noise floor {:.3e})",
                     self.min_removed_vs_floor, base.noise_floor_estimate
                 ));
+            }
+            if let Some(why) = &c.unconfirmed {
+                fails.push(format!("unconfirmed: {why}"));
             }
             c.passes = fails.is_empty();
             c.fails = fails;

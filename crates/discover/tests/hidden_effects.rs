@@ -119,7 +119,6 @@ fn hidden_rate() {
 }
 
 #[test]
-#[ignore = "borderline at seed 11: Shupe ranks first but Δ log evidence +4.4 (< 5) and held-out improvement 18.9 % (< 20 %), base held-out 1.70× floor; the demo (seed 1) passes: 3.2× → 1.04× floor"]
 fn hidden_shupe() {
     let p = tcomp_discover::demo::demo_preset(11).unwrap();
     let o = case_preset(p, Some(Shupe));
