@@ -257,13 +257,18 @@ pub fn run(opts: &DemoOptions, mut say: impl FnMut(&str)) -> Result<DemoOutcome>
     for c in d.candidates.iter().take(4) {
         let _ = writeln!(
             s,
-            "   {} {:<52} Δ log evidence {:+8.1}   held-out {:.4} → {:.4} {unit} ({:+.1} %)",
+            "   {} {:<52} Δ log evidence {:+8.1}   held-out {:.4} → {:.4} {unit} ({:+.1} %){}",
             if c.passes { "✔" } else { " " },
             c.effect,
             c.delta_log_evidence,
             c.residual_std_before,
             c.residual_std_after,
-            -c.improvement_pct
+            -c.improvement_pct,
+            if c.confirmation.is_some() {
+                ", refitted"
+            } else {
+                ", scoring estimate"
+            }
         );
     }
     let _ = write!(s, "   Verdict: {}", d.verdict_text);

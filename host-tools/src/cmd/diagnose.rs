@@ -137,23 +137,28 @@ pub fn text(a: &Analysis, top: usize) -> String {
     );
     let _ = writeln!(
         s,
-        "  held-out residual of the model's features {:.4e} {u}; noise floor estimate {:.4e} {u}",
-        b.heldout_residual_std, b.noise_floor_estimate
+        "  held-out residual of the model's features {:.4e} {u} (refitted by the trainer: {:.4e} {u}); noise floor estimate {:.4e} {u}",
+        b.heldout_residual_std, d.refit_residual_std_before, b.noise_floor_estimate
     );
     let _ = writeln!(
         s,
-        "  {:<3}{:<58} {:>9} {:>12} {:>8}  expression",
-        "", "effect", "Δ ln E", "held-out", "better"
+        "  {:<3}{:<58} {:>9} {:>12} {:>8}  {:<8} expression",
+        "", "effect", "Δ ln E", "held-out", "better", "from"
     );
     for c in d.candidates.iter().take(top) {
         let _ = writeln!(
             s,
-            "  {:<3}{:<58} {:>+9.1} {:>12.4e} {:>7.1}%  {}",
+            "  {:<3}{:<58} {:>+9.1} {:>12.4e} {:>7.1}%  {:<8} {}",
             if c.passes { "✔" } else { "" },
             c.effect,
             c.delta_log_evidence,
             c.residual_std_after,
             c.improvement_pct,
+            if c.confirmation.is_some() {
+                "refit"
+            } else {
+                "scoring"
+            },
             c.expressions.join(" ; ")
         );
     }
