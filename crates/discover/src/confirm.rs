@@ -108,6 +108,8 @@ pub fn confirm(
             )
         }
     };
+    let heldout_bin_s =
+        tcomp_train::features::adaptive_bin(test.time(&roles.time)?, opts.heldout_bin_s, 10);
     let mut order: Vec<usize> = (0..cands.len())
         .filter(|&i| cands[i].delta_log_evidence >= 0.0)
         .collect();
@@ -125,7 +127,7 @@ pub fn confirm(
             let extra = job
                 .map(|i| cands[i].expressions.clone())
                 .unwrap_or_default();
-            heldout_std(info, roles, &train, &test, &extra, opts.heldout_bin_s)
+            heldout_std(info, roles, &train, &test, &extra, heldout_bin_s)
         })
         .collect();
     let mut results = results.into_iter();

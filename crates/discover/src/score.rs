@@ -263,6 +263,14 @@ pub fn prepare(
     opts: &ScoreOptions,
 ) -> Result<Prepared> {
     let time = data.time(&roles.time)?;
+    // Bursty records get shorter bins than asked (see `adaptive_bin`); the figures report them.
+    let mut adapted = opts.clone();
+    adapted.bin_s = tcomp_train::features::adaptive_bin(time, opts.bin_s, 24);
+    if let Some(v) = verify {
+        adapted.heldout_bin_s =
+            tcomp_train::features::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
+    }
+    let opts = &adapted;
     let starts = segments(time, opts.gap_s);
     let tbins = bins(time, opts.bin_s);
     let err = error_of(data, roles)?;

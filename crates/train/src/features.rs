@@ -146,6 +146,18 @@ pub fn bins(time: &[f64], bin_s: f64) -> Vec<(usize, usize)> {
     out
 }
 
+/// The bin length to use for `wanted_s` on this time axis: `wanted_s` halved until [`bins`] gives
+/// at least `min_bins` bins that hold data, but not below two sample steps. Continuous records keep
+/// `wanted_s`; bursty ones (a few seconds of data every few minutes) get bins that fit their bursts.
+pub fn adaptive_bin(time: &[f64], wanted_s: f64, min_bins: usize) -> f64 {
+    let floor = 2.0 * crate::dataset::median_step(time);
+    let mut bin_s = wanted_s;
+    while bins(time, bin_s).len() < min_bins && bin_s / 2.0 >= floor {
+        bin_s /= 2.0;
+    }
+    bin_s
+}
+
 /// Mean of `v` over each bin.
 pub fn bin_mean(v: &[f64], bins: &[(usize, usize)]) -> Vec<f64> {
     bins.iter()

@@ -386,9 +386,13 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
         ranges.push(FeatureRange { lo, hi });
     }
     let span = time.last().copied().unwrap_or(0.0) - time.first().copied().unwrap_or(0.0);
-    let average_s = opts
+    let mut average_s = opts
         .average_s
         .unwrap_or_else(|| DEFAULT_AVERAGE_S.min(span / MIN_DEFAULT_BINS));
+    if opts.average_s.is_none() {
+        // Bursty records (short bursts minutes apart) leave most default bins empty.
+        average_s = crate::features::adaptive_bin(time, average_s, MIN_DEFAULT_BINS as usize);
+    }
     let b = bins(time, average_s);
     let y = bin_mean(&error, &b);
     let cols: Vec<Vec<f64>> = (0..nf)
