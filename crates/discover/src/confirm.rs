@@ -8,8 +8,9 @@
 //! refitted exactly as the user would — the trainer's default method, the model's features plus the
 //! candidate — and evaluated through the core on the held-out data; the verdict then rests on those
 //! figures. The base feature set is refitted the same way, so the comparison differs only in the
-//! candidate. Held-out data: the verification run, or without one the last 30 % of the training run
-//! (training on the first 70 %).
+//! candidate. Held-out data: the verification run, or without one each of `folds` contiguous blocks
+//! of the training run in turn, predicted by a fit on the rest (the time gap resets the feature
+//! state), the blocks' binned residual variances pooled.
 
 use crate::score::Scored;
 use crate::{ModelInfo, Result};
@@ -25,8 +26,8 @@ pub struct ConfirmOptions {
     pub top: usize,
     /// Bin of the held-out residual (s).
     pub heldout_bin_s: f64,
-    /// Fraction of the training run held out when there is no verification run.
-    pub holdout_fraction: f64,
+    /// Contiguous blocks of the training run when there is no verification run.
+    pub folds: usize,
 }
 
 impl Default for ConfirmOptions {
@@ -34,7 +35,7 @@ impl Default for ConfirmOptions {
         Self {
             top: 3,
             heldout_bin_s: 100.0,
-            holdout_fraction: 0.3,
+            folds: 5,
         }
     }
 }
@@ -52,15 +53,16 @@ pub struct Confirmation {
     pub heldout: String,
 }
 
-/// Held-out residual std of a fit of `features` on `train`, evaluated on `test`.
-fn heldout_std(
-    info: &ModelInfo,
-    roles: &Roles,
-    train: &Dataset,
-    test: &Dataset,
-    extra: &[String],
+/// One train/test split.
+struct Split {
+    train: Dataset,
+    test: Dataset,
     bin_s: f64,
-) -> Result<f64> {
+}
+
+/// Held-out residual std (binned) of a fit of the model's features plus `extra`: pooled over the
+/// splits as the root of the bin-weighted mean variance.
+fn heldout_std(info: &ModelInfo, roles: &Roles, splits: &[Split], extra: &[String]) -> Result<f64> {
     let mut o = FitOptions::new(&roles.target, &[]);
     o.time.clone_from(&roles.time);
     o.reference.clone_from(&roles.reference);
@@ -68,11 +70,94 @@ fn heldout_std(
     o.spec.signals.clone_from(&info.spec.signals);
     o.spec.features.clone_from(&info.spec.features);
     o.spec.features.extend(extra.iter().cloned());
-    let fitted = tcomp_train::fit(train, &o)?;
-    let bytes = fitted.model.to_bytes()?;
-    let model = tcomp_train::blob_io::decode(Path::new("<refit>"), &bytes)?;
-    let run = metrics::run_model(&model, test, &Roles::of_model(&model), None, None)?;
-    Ok(metrics::report(&run, bin_s).binned.residual_std)
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for sp in splits {
+        let fitted = tcomp_train::fit(&sp.train, &o)?;
+        let bytes = fitted.model.to_bytes()?;
+        let model = tcomp_train::blob_io::decode(Path::new("<refit>"), &bytes)?;
+        let run = metrics::run_model(&model, &sp.test, &Roles::of_model(&model), None, None)?;
+        let b = metrics::report(&run, sp.bin_s).binned;
+        sum += b.residual_std.powi(2) * b.bins as f64;
+        count += b.bins;
+    }
+    Ok(if count > 0 {
+        (sum / count as f64).sqrt()
+    } else {
+        f64::NAN
+    })
+}
+
+/// The rows of `data` whose time is outside `[lo, hi)`.
+fn without(data: &Dataset, time: &[f64], lo: f64, hi: f64) -> Dataset {
+    let keep: Vec<usize> = time
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| **t < lo || **t >= hi)
+        .map(|(i, _)| i)
+        .collect();
+    let cols = data
+        .names()
+        .iter()
+        .map(|n| {
+            let c = data.column(n).unwrap_or(&[]);
+            keep.iter()
+                .map(|&i| c.get(i).copied().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    Dataset::from_columns(
+        &format!("{} without [{lo:.0}, {hi:.0}) s", data.file()),
+        data.names().to_vec(),
+        cols,
+    )
+}
+
+fn splits(
+    roles: &Roles,
+    data: &Dataset,
+    verify: Option<&Dataset>,
+    opts: &ConfirmOptions,
+) -> Result<(Vec<Split>, String)> {
+    if let Some(v) = verify {
+        let bin_s =
+            tcomp_train::features::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
+        let split = Split {
+            train: data.clone(),
+            test: v.clone(),
+            bin_s,
+        };
+        return Ok((vec![split], format!("verification run {}", v.file())));
+    }
+    let t = data.time(&roles.time)?;
+    let (t0, t1) = (
+        t.first().copied().unwrap_or(0.0),
+        t.last().copied().unwrap_or(0.0),
+    );
+    let k = opts.folds.max(2);
+    let edge = |i: usize| t0 + (t1 - t0) * i as f64 / k as f64;
+    let mut out = Vec::new();
+    for i in 0..k {
+        let (lo, hi) = (
+            edge(i),
+            if i + 1 == k {
+                f64::INFINITY
+            } else {
+                edge(i + 1)
+            },
+        );
+        let test = data.select_time(&roles.time, lo, hi)?;
+        let bin_s =
+            tcomp_train::features::adaptive_bin(test.time(&roles.time)?, opts.heldout_bin_s, 10);
+        out.push(Split {
+            train: without(data, t, lo, hi),
+            test,
+            bin_s,
+        });
+    }
+    Ok((
+        out,
+        format!("{k} contiguous blocks of the training run, each predicted by a fit on the rest"),
+    ))
 }
 
 /// Refits the leading candidates and replaces their held-out figures with the real ones; every
@@ -85,31 +170,7 @@ pub fn confirm(
     cands: &mut [Scored],
     opts: &ConfirmOptions,
 ) -> Result<f64> {
-    let (train, test, heldout) = match verify {
-        Some(v) => (
-            data.clone(),
-            v.clone(),
-            format!("verification run {}", v.file()),
-        ),
-        None => {
-            let t = data.time(&roles.time)?;
-            let (t0, t1) = (
-                t.first().copied().unwrap_or(0.0),
-                t.last().copied().unwrap_or(0.0),
-            );
-            let split = t0 + (1.0 - opts.holdout_fraction) * (t1 - t0);
-            (
-                data.select_time(&roles.time, f64::NEG_INFINITY, split)?,
-                data.select_time(&roles.time, split, f64::INFINITY)?,
-                format!(
-                    "last {:.0} % of the training run",
-                    100.0 * opts.holdout_fraction
-                ),
-            )
-        }
-    };
-    let heldout_bin_s =
-        tcomp_train::features::adaptive_bin(test.time(&roles.time)?, opts.heldout_bin_s, 10);
+    let (splits, heldout) = splits(roles, data, verify, opts)?;
     let mut order: Vec<usize> = (0..cands.len())
         .filter(|&i| cands[i].delta_log_evidence >= 0.0)
         .collect();
@@ -127,7 +188,7 @@ pub fn confirm(
             let extra = job
                 .map(|i| cands[i].expressions.clone())
                 .unwrap_or_default();
-            heldout_std(info, roles, &train, &test, &extra, heldout_bin_s)
+            heldout_std(info, roles, &splits, &extra)
         })
         .collect();
     let mut results = results.into_iter();
