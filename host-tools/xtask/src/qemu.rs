@@ -193,6 +193,8 @@ pub fn qemu() -> Result<()> {
         "replay",
     ])?;
     let elf = target_dir.join(TARGET).join("release/replay");
+    // The host CLI makes the models and vectors; build it so `cargo xtask qemu` stands alone.
+    cargo(&["build", "-p", "tcomp"])?;
     fit_models(&work)?;
     for k in ["rlg", "qma", "ifog"] {
         let toml = root.join(format!("firmware/replay/{k}.toml"));
