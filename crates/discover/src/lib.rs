@@ -5,7 +5,7 @@
 //! Modules: [`segments`] (where it fails: warm-up, holds, ramps, bands, worst intervals),
 //! [`candidates`] (which effects could be missing, with physical names and ready expressions),
 //! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual),
-//! [`evidence`] (the grouped-prior evidence arithmetic under it), [`verdict`] (the stated
+//! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`verdict`] (the stated
 //! criterion), [`report`] (self-contained HTML with SVG plots), [`demo`] (the built-in narrative).
 //!
 //! ```no_run
@@ -22,7 +22,6 @@ pub mod candidates;
 pub mod confirm;
 pub mod demo;
 pub mod error;
-pub mod evidence;
 pub mod report;
 pub mod score;
 pub mod segments;

@@ -25,12 +25,12 @@
 
 use crate::candidates::{Candidate, EffectKind, Family};
 use crate::error::{DiscoverError, Result};
-use crate::evidence::{self, GroupFit};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
 use tcomp_train::bayes::{self, BayesOptions};
 use tcomp_train::dataset::segments;
+use tcomp_train::evidence::{self, GroupFit};
 use tcomp_train::features::{self, FeatureSpec, bin_mean, bins};
 use tcomp_train::rbf64::Rbf64;
 use tcomp_train::{Dataset, Roles};

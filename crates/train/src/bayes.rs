@@ -83,89 +83,31 @@ struct Fitted {
 }
 
 /// Evidence iteration on a fixed design (columns laid out as [`design`], `nl` linear columns), for
-/// targets `y` already normalised to zero mean and unit variance.
+/// targets `y` already normalised to zero mean and unit variance: three prior groups — the bias
+/// (flat), the linear terms, the Gaussians — in [`crate::evidence`].
 fn evidence_fit(phi: &DMatrix<f64>, y: &DVector<f64>, nl: usize) -> Option<Fitted> {
-    let n = phi.nrows() as f64;
     let m = phi.ncols();
-    let g = phi.tr_mul(phi);
-    let b = phi.tr_mul(y);
-    let yy = y.dot(y);
-    let group = |i: usize| -> usize {
-        if i == 0 {
-            0
-        } else if i <= nl {
-            1
-        } else {
-            2
-        }
-    };
-    let counts = [1usize, nl, m - 1 - nl];
-    let mut alpha = [1e-8, 1.0, 1.0];
-    let mut beta = 10.0;
-    let mut iterations = 0;
-    let solve = |alpha: &[f64; 3], beta: f64| {
-        let mut a = &g * beta;
-        for i in 0..m {
-            a[(i, i)] += alpha[group(i)];
-        }
-        let chol = a.cholesky()?;
-        let ainv = chol.inverse();
-        let w = &ainv * &b * beta;
-        let ed = (0.5 * (yy - 2.0 * w.dot(&b) + w.dot(&(&g * &w)))).max(1e-300);
-        let logdet: f64 = chol.l().diagonal().iter().map(|d| 2.0 * d.ln()).sum();
-        Some((ainv, w, ed, logdet))
-    };
-    for it in 0..2000 {
-        iterations = it + 1;
-        let (ainv, w, ed, _) = solve(&alpha, beta)?;
-        let mut gam = [0.0f64; 3];
-        let mut ew = [0.0f64; 3];
-        for i in 0..m {
-            let k = group(i);
-            gam[k] += 1.0 - alpha[k] * ainv[(i, i)];
-            ew[k] += 0.5 * w[i] * w[i];
-        }
-        let mut next = alpha;
-        for k in 1..3 {
-            if counts[k] > 0 {
-                next[k] = (gam[k] / (2.0 * ew[k]).max(1e-300)).clamp(1e-10, 1e12);
-            }
-        }
-        let gamma_total: f64 = gam.iter().sum();
-        let next_beta = ((n - gamma_total).max(1e-3) / (2.0 * ed)).clamp(1e-10, 1e14);
-        let rel = |a: f64, b: f64| ((a - b) / b.abs().max(1e-300)).abs();
-        let done = (1..3).all(|k| rel(next[k], alpha[k]) < 1e-6) && rel(next_beta, beta) < 1e-6;
-        alpha = next;
-        beta = next_beta;
-        if done {
-            break;
-        }
-    }
-    let (ainv, w, ed, logdet) = solve(&alpha, beta)?;
-    let mut gamma = 0.0;
-    let mut log_ev = 0.5 * n * beta.ln()
-        - beta * ed
-        - 0.5 * logdet
-        - 0.5 * n * (2.0 * std::f64::consts::PI).ln();
-    for i in 0..m {
-        let k = group(i);
-        gamma += 1.0 - alpha[k] * ainv[(i, i)];
-        if k > 0 {
-            log_ev += 0.5 * alpha[k].ln() - 0.5 * alpha[k] * w[i] * w[i];
-        }
-    }
-    if !log_ev.is_finite() {
-        return None;
-    }
+    let groups: Vec<usize> = (0..m)
+        .map(|i| match i {
+            0 => 0,
+            i if i <= nl => 1,
+            _ => 2,
+        })
+        .collect();
+    let start = [1e-8, 1.0, 1.0];
+    let settings = crate::evidence::Settings::TRAINER;
+    let fit = crate::evidence::fit_with(phi, y, &groups, Some((&start, 10.0)), &settings)?;
+    let alpha_of = |k: usize| fit.alpha.get(k).copied().unwrap_or(0.0);
+    let n_gauss = m.saturating_sub(1 + nl);
     Some(Fitted {
-        w: w.iter().copied().collect(),
+        w: fit.w.iter().copied().collect(),
         ev: Evidence {
-            alpha: if counts[2] > 0 { alpha[2] } else { 0.0 },
-            alpha_linear: if nl > 0 { alpha[1] } else { 0.0 },
-            beta,
-            gamma,
-            log_evidence: log_ev,
-            iterations,
+            alpha: if n_gauss > 0 { alpha_of(2) } else { 0.0 },
+            alpha_linear: if nl > 0 { alpha_of(1) } else { 0.0 },
+            beta: fit.beta,
+            gamma: fit.gamma,
+            log_evidence: fit.log_evidence,
+            iterations: fit.iterations,
         },
     })
 }

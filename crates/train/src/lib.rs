@@ -20,6 +20,7 @@ pub mod bayes;
 pub mod blob_io;
 pub mod dataset;
 pub mod error;
+pub mod evidence;
 pub mod features;
 pub mod gradient;
 pub mod kmeans;

@@ -1,14 +1,13 @@
-//! MacKay evidence for a linear-in-parameters model whose weights fall into groups, each with its own
-//! prior precision α — the arithmetic under candidate scoring.
+//! MacKay's evidence framework for a linear-in-parameters model whose weights fall into groups, each
+//! with its own prior precision α: the one implementation under the trainer's `bayes` method (groups:
+//! bias, linear terms, Gaussians) and the discovery loop's candidate scoring (a candidate column gets
+//! its own group, so a useless one is switched off by α → ∞ and its Δ log evidence goes to 0 instead
+//! of diluting the prior of the base's weights; the iteration can be warm-started).
 //!
-//! Why a second implementation beside `tcomp_train::bayes`: scoring compares the *same* base design
-//! with and without one candidate column, so the candidate needs its own α group (a useless column
-//! is then switched off by α → ∞ and its Δ log evidence goes to 0 instead of diluting the prior of
-//! the base's linear weights), the iteration is warm-started from the base fit, and the held-out
-//! refits reuse the converged hyperparameters. The formulas are those of the trainer: for
-//! `A = βΦᵀΦ + diag(α)`, `γ_g = Σ_{i∈g}(1 − α_g·(A⁻¹)_ii)`, `α_g ← γ_g/‖w_g‖²`,
-//! `β ← (N − γ)/‖y − Φw‖²`; group 0 (the bias) has a fixed, nearly flat prior that cancels in
-//! evidence differences.
+//! For `A = βΦᵀΦ + diag(α)`: `γ_g = Σ_{i∈g}(1 − α_g·(A⁻¹)_ii)`, `α_g ← γ_g/‖w_g‖²`,
+//! `β ← (N − γ)/‖y − Φw‖²`, iterated until α and β change less than [`Settings`]' tolerances; group 0
+//! (the bias) has a fixed, nearly flat prior that cancels in evidence differences. The log evidence
+//! is `N/2·ln β − β·E_D − ½ ln|A| − N/2·ln 2π + Σ_g (|g|/2·ln α_g − α_g·E_W,g)`.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -16,6 +15,36 @@ use nalgebra::{DMatrix, DVector};
 const FLAT: f64 = 1e-8;
 /// Largest α: a group at this value is switched off.
 const ALPHA_MAX: f64 = 1e12;
+
+/// Convergence settings.
+#[derive(Clone, Copy, Debug)]
+pub struct Settings {
+    /// Most iterations.
+    pub max_iterations: usize,
+    /// Relative change of every α below which it has converged.
+    pub alpha_tolerance: f64,
+    /// Relative change of β below which it has converged.
+    pub beta_tolerance: f64,
+    /// Count a group whose α passed 1e10 (switched off) as converged.
+    pub switched_off_converged: bool,
+}
+
+impl Settings {
+    /// What the trainer uses.
+    pub const TRAINER: Settings = Settings {
+        max_iterations: 2000,
+        alpha_tolerance: 1e-6,
+        beta_tolerance: 1e-6,
+        switched_off_converged: false,
+    };
+    /// What candidate scoring uses (tighter on β, stops once a useless column is switched off).
+    pub const SCORING: Settings = Settings {
+        max_iterations: 1000,
+        alpha_tolerance: 1e-6,
+        beta_tolerance: 1e-7,
+        switched_off_converged: true,
+    };
+}
 
 /// A converged fit.
 #[derive(Clone, Debug)]
@@ -30,15 +59,28 @@ pub struct GroupFit {
     pub gamma: f64,
     /// Log evidence (of `y` as given: normalised units).
     pub log_evidence: f64,
+    /// Iterations run.
+    pub iterations: usize,
 }
 
 /// Fits `y ≈ Φw` with weight groups `group[j]` (0 = bias, fixed prior), starting from `start`
-/// (α per group and β) when given.
+/// (α per group and β) when given, with the scoring settings.
 pub fn fit(
     phi: &DMatrix<f64>,
     y: &DVector<f64>,
     group: &[usize],
     start: Option<(&[f64], f64)>,
+) -> Option<GroupFit> {
+    fit_with(phi, y, group, start, &Settings::SCORING)
+}
+
+/// [`fit`] with explicit convergence settings. A group with no columns keeps its starting α.
+pub fn fit_with(
+    phi: &DMatrix<f64>,
+    y: &DVector<f64>,
+    group: &[usize],
+    start: Option<(&[f64], f64)>,
+    settings: &Settings,
 ) -> Option<GroupFit> {
     let n = phi.nrows() as f64;
     let m = phi.ncols();
@@ -58,6 +100,12 @@ pub fn fit(
         *a = FLAT;
     }
     let gr = |i: usize| group.get(i).copied().unwrap_or(0);
+    let mut members = vec![0usize; ng];
+    for i in 0..m {
+        if let Some(c) = members.get_mut(gr(i)) {
+            *c += 1;
+        }
+    }
     let solve = |alpha: &[f64], beta: f64| {
         let mut a = &g * beta;
         for i in 0..m {
@@ -70,7 +118,9 @@ pub fn fit(
         let logdet: f64 = chol.l().diagonal().iter().map(|d| 2.0 * d.ln()).sum();
         Some((ainv, w, ed, logdet))
     };
-    for _ in 0..1000 {
+    let mut iterations = 0;
+    for it in 0..settings.max_iterations {
+        iterations = it + 1;
         let (ainv, w, ed, _) = solve(&alpha, beta)?;
         let mut gam = vec![0.0f64; ng];
         let mut ew = vec![0.0f64; ng];
@@ -81,13 +131,17 @@ pub fn fit(
         }
         let mut next = alpha.clone();
         for k in 1..ng {
-            next[k] = (gam[k] / (2.0 * ew[k]).max(1e-300)).clamp(1e-10, ALPHA_MAX);
+            if members[k] > 0 {
+                next[k] = (gam[k] / (2.0 * ew[k]).max(1e-300)).clamp(1e-10, ALPHA_MAX);
+            }
         }
         let gamma_total: f64 = gam.iter().sum();
         let next_beta = ((n - gamma_total).max(1e-3) / (2.0 * ed)).clamp(1e-10, 1e14);
         let rel = |a: f64, b: f64| ((a - b) / b.abs().max(1e-300)).abs();
-        let done = (1..ng).all(|k| rel(next[k], alpha[k]) < 1e-6 || next[k] > 1e10)
-            && rel(next_beta, beta) < 1e-7;
+        let done = (1..ng).all(|k| {
+            rel(next[k], alpha[k]) < settings.alpha_tolerance
+                || (settings.switched_off_converged && next[k] > 1e10)
+        }) && rel(next_beta, beta) < settings.beta_tolerance;
         alpha = next;
         beta = next_beta;
         if done {
@@ -113,6 +167,7 @@ pub fn fit(
         beta,
         gamma,
         log_evidence: log_ev,
+        iterations,
     })
 }
 
