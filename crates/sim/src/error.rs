@@ -59,6 +59,24 @@ impl Error {
         }
     }
 
+    /// `Ok` when `v` is finite and > 0, else an [`Error::Invalid`] naming `field`.
+    pub fn positive(field: impl Into<String>, v: f64) -> Result<()> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(Error::invalid(field, format!("must be > 0, got {v}")))
+        }
+    }
+
+    /// `Ok` when `v` is finite and ≥ 0, else an [`Error::Invalid`] naming `field`.
+    pub fn non_negative(field: impl Into<String>, v: f64) -> Result<()> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(())
+        } else {
+            Err(Error::invalid(field, format!("must be >= 0, got {v}")))
+        }
+    }
+
     /// An [`Error::Io`] about `path`.
     pub fn io(path: &Path, source: std::io::Error) -> Self {
         Error::Io {

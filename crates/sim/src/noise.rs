@@ -68,16 +68,7 @@ impl NoiseSpec {
 
     /// Checks the values; errors name `prefix.<field>`.
     pub fn validate(&self, prefix: &str) -> Result<()> {
-        let nonneg = |v: f64, f: &str| -> Result<()> {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err(Error::invalid(
-                    format!("{prefix}.{f}"),
-                    format!("must be >= 0, got {v}"),
-                ))
-            }
-        };
+        let nonneg = |v: f64, f: &str| Error::non_negative(format!("{prefix}.{f}"), v);
         nonneg(self.white_density, "white_density")?;
         nonneg(self.bias_instability, "bias_instability")?;
         nonneg(self.pulse_weight, "pulse_weight")?;

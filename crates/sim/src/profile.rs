@@ -327,16 +327,7 @@ impl RandomProfile {
     }
 
     fn validate(&self, p: &str) -> Result<()> {
-        let pos = |v: f64, f: &str| -> Result<()> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::invalid(
-                    format!("{p}.{f}"),
-                    format!("must be > 0, got {v}"),
-                ))
-            }
-        };
+        let pos = |v: f64, f: &str| Error::positive(format!("{p}.{f}"), v);
         pos(self.max_rate_c_per_min, "max_rate_c_per_min")?;
         pos(self.min_rate_c_per_min, "min_rate_c_per_min")?;
         pos(self.min_hold_s, "min_hold_s")?;

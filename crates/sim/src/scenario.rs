@@ -310,13 +310,7 @@ impl Scenario {
 
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
-        let pos = |v: f64, f: &str| -> Result<()> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::invalid(f, format!("must be > 0, got {v}")))
-            }
-        };
+        let pos = |v: f64, f: &str| Error::positive(f, v);
         pos(self.rate_hz, "rate_hz")?;
         pos(self.step_s, "step_s")?;
         let k = self.step_s * self.rate_hz;

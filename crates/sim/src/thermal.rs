@@ -43,26 +43,8 @@ impl ThermometerSpec {
 
     /// Checks the values; errors name `prefix.<field>`.
     pub fn validate(&self, prefix: &str) -> Result<()> {
-        let pos = |v: f64, f: &str| -> Result<()> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::invalid(
-                    format!("{prefix}.{f}"),
-                    format!("must be > 0, got {v}"),
-                ))
-            }
-        };
-        let nonneg = |v: f64, f: &str| -> Result<()> {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err(Error::invalid(
-                    format!("{prefix}.{f}"),
-                    format!("must be >= 0, got {v}"),
-                ))
-            }
-        };
+        let pos = |v: f64, f: &str| Error::positive(format!("{prefix}.{f}"), v);
+        let nonneg = |v: f64, f: &str| Error::non_negative(format!("{prefix}.{f}"), v);
         pos(self.tau_s, "tau_s")?;
         pos(self.self_heating_tau_s, "self_heating_tau_s")?;
         if !self.self_heating_c.is_finite() {
