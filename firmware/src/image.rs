@@ -62,18 +62,8 @@ impl core::fmt::Display for ImageError {
     }
 }
 
-/// CRC-32/ISO-HDLC (reflected, polynomial 0xEDB88320), bit by bit: the table is small and read once.
-pub fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            let mask = (crc & 1).wrapping_neg();
-            crc = (crc >> 1) ^ (0xEDB8_8320 & mask);
-        }
-    }
-    !crc
-}
+/// CRC-32/ISO-HDLC of the table: the core's, the same as every blob's.
+pub use tcomp_core::blob::crc32;
 
 fn u16_at(b: &[u8], at: usize) -> Option<u16> {
     let s = b.get(at..at + 2)?;

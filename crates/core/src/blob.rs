@@ -23,9 +23,6 @@ use serde::{Deserialize, Serialize};
 pub const MAGIC: [u8; 4] = *b"TCMB";
 /// The blob format version this build reads and writes.
 pub const FORMAT_VERSION: u16 = 1;
-/// Bitwise CRC (no 1 KiB lookup table): a blob is checked once at load, so flash matters more
-/// than the microseconds.
-const CRC: crc::Crc<u32, crc::NoTable> = crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
 
 /// The instrument a model compensates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -177,6 +174,21 @@ impl core::fmt::Display for BlobError {
     }
 }
 
+/// CRC-32/ISO-HDLC (zip, PNG: reflected polynomial 0xEDB88320) of `bytes`: the blob's checksum,
+/// also used by the firmware's blob image, so every checksum in the project comes from one
+/// implementation. Bit by bit, without a 1 KiB table: a blob is checked once at load, so flash
+/// matters more than the microseconds.
+pub fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = (crc >> 1) ^ (0xEDB8_8320 & (crc & 1).wrapping_neg());
+        }
+    }
+    !crc
+}
+
 impl From<RbfError> for BlobError {
     fn from(e: RbfError) -> Self {
         match e {
@@ -267,7 +279,7 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
     pub fn encode(&self, buf: &mut [u8]) -> Result<usize, BlobError> {
         self.validate()?;
         let used = postcard::to_slice(self, buf).map_err(map_postcard)?.len();
-        let crc = CRC.checksum(buf.get(..used).ok_or(BlobError::BufferTooSmall)?);
+        let crc = crc32(buf.get(..used).ok_or(BlobError::BufferTooSmall)?);
         let tail = buf
             .get_mut(used..used + 4)
             .ok_or(BlobError::BufferTooSmall)?;
@@ -295,7 +307,7 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
             .ok_or(BlobError::Truncated)?;
         let mut crc = [0u8; 4];
         crc.copy_from_slice(crc_bytes);
-        if CRC.checksum(body) != u32::from_le_bytes(crc) {
+        if crc32(body) != u32::from_le_bytes(crc) {
             return Err(BlobError::Checksum);
         }
         let (model, rest) = postcard::take_from_bytes::<Self>(body).map_err(map_postcard)?;

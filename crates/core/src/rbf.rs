@@ -6,9 +6,9 @@
 //! extrapolate along a trend where Gaussians alone would fade to `w0`.
 //!
 //! # Stored form
-//! A center is stored *expanded*, in the eval units of [`crate::fastexp`] (`g = γ·32·log2 e`):
+//! A center is stored *expanded*, in the eval units of [`crate::fastexp`] (`g = γ·16·log2 e`):
 //! `uj = pj + gj·‖z‖² + Σk qjk·zk` with `pj = gj·‖cj‖²` and `qj = −2gj·cj`, so that
-//! `exp(−γj‖z − cj‖²) = 2^(−uj/32)`. Per center that is one multiply-add per feature plus one, instead
+//! `exp(−γj‖z − cj‖²) = 2^(−uj/16)`. Per center that is one multiply-add per feature plus one, instead
 //! of a subtraction, a multiply-add and a scaling, and the record `[p, q…, g, w]` is contiguous: on a
 //! Cortex-M4F a 32 × 4 evaluation fits in under 1,000 instructions (see BENCHMARKS.md).
 //! [`Center::from_natural`] and [`Center::to_natural`] convert from and to `(c, γ, w)`. The price is
@@ -18,7 +18,7 @@
 //! Summation order is fixed and no fused multiply-add is used: host and Cortex-M4F give identical
 //! bits. A center whose exponent exceeds [`EXP_CUTOFF`] contributes less than `2e-9·|w|` and is skipped.
 
-use crate::fastexp::{EVAL_CUTOFF, EVAL_UNITS_PER_NAT, EXP_CUTOFF, exp2_32_neg};
+use crate::fastexp::{EVAL_CUTOFF, EVAL_UNITS_PER_NAT, EXP_CUTOFF, exp2_16_neg};
 use crate::point::Point;
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
@@ -31,7 +31,7 @@ pub struct Center<const F: usize> {
     pub p: f32,
     /// `−2g·c`.
     pub q: Point<F>,
-    /// `g = γ·32·log2(e)`, `γ = 1/(2σ²)` in normalised units.
+    /// `g = γ·16·log2(e)`, `γ = 1/(2σ²)` in normalised units.
     pub g: f32,
     /// Output weight.
     pub w: f32,
@@ -157,7 +157,7 @@ impl<const C: usize, const F: usize> Rbf<C, F> {
                 u += *qk * *zk;
             }
             if u < EVAL_CUTOFF {
-                acc += c.w * exp2_32_neg(u);
+                acc += c.w * exp2_16_neg(u);
             }
         }
         acc

@@ -141,3 +141,10 @@ proptest! {
         prop_assert!(HostModel::decode(&bad).is_err());
     }
 }
+
+#[test]
+fn crc32_is_the_standard_iso_hdlc() {
+    // The check value of CRC-32/ISO-HDLC (zip, PNG) for "123456789".
+    assert_eq!(tcomp_core::blob::crc32(b"123456789"), 0xCBF4_3926);
+    assert_eq!(tcomp_core::blob::crc32(b""), 0);
+}

@@ -30,18 +30,6 @@ pub struct Args {
     pub out: PathBuf,
 }
 
-/// CRC-32/ISO-HDLC, as the firmware computes it.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = (crc >> 1) ^ (0xEDB8_8320 & (crc & 1).wrapping_neg());
-        }
-    }
-    !crc
-}
-
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     if args.models.len() > MAX_ENTRIES {
@@ -81,7 +69,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     image.extend_from_slice(MAGIC);
     image.extend_from_slice(&VERSION.to_le_bytes());
     image.extend_from_slice(&(blobs.len() as u16).to_le_bytes());
-    image.extend_from_slice(&crc32(&table).to_le_bytes());
+    image.extend_from_slice(&tcomp_core::blob::crc32(&table).to_le_bytes());
     image.extend_from_slice(&table);
     image.resize(table_end.next_multiple_of(4), 0);
     image.extend_from_slice(&body);

@@ -16,10 +16,11 @@ const INSTRUCTIONS_TARGET: u64 = 6_500;
 const FLASH_TARGET: u64 = 32 * 1024;
 /// … and the budgets enforced now. Instructions (mean per 6-channel sample) meet the target
 /// since each channel refreshes its correction on one sample in six (`app::MODEL_INTERVAL`): 5,240;
-/// evaluating every model every sample costs 10,039. Flash and stack are the figures reached
-/// (34,980 B, 25,252 B) plus a small margin. Static RAM meets the 8 KiB.
+/// evaluating every model every sample costs 10,039. Flash meets the 32 KiB (32,688 B with
+/// the 512-entry exp table and one bitwise CRC). Stack is the figure reached (25,252 B) plus a small
+/// margin. Static RAM meets the 8 KiB.
 const INSTRUCTIONS_BUDGET: u64 = INSTRUCTIONS_TARGET;
-const FLASH_BUDGET: u64 = 36 * 1024;
+const FLASH_BUDGET: u64 = FLASH_TARGET;
 const STATIC_RAM_BUDGET: u64 = 8 * 1024;
 const STACK_BUDGET: u64 = 28 * 1024;
 const SAMPLES: usize = 10_000;
