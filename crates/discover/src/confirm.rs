@@ -10,7 +10,8 @@
 //! figures. The base feature set is refitted the same way, so the comparison differs only in the
 //! candidate. Held-out data: the verification run, or without one each of `folds` contiguous blocks
 //! of the training run in turn, predicted by a fit on the rest (the time gap resets the feature
-//! state), the blocks' binned residual variances pooled.
+//! state), the blocks' binned residual variances pooled — and then the candidate must also lower the
+//! residual in a majority of the blocks, so one block's drift cannot carry it.
 
 use crate::score::Scored;
 use crate::{ModelInfo, Result};
@@ -51,7 +52,14 @@ pub struct Confirmation {
     pub improvement_pct: f64,
     /// What the held-out data was.
     pub heldout: String,
+    /// Held-out blocks (1 for a verification run) in which the candidate lowered the residual.
+    pub splits_improved: usize,
+    /// Held-out blocks.
+    pub splits: usize,
 }
+
+/// Pooled held-out residual std and the one of each split.
+type HeldOutFigures = (f64, Vec<f64>);
 
 /// One train/test split.
 struct Split {
@@ -61,8 +69,13 @@ struct Split {
 }
 
 /// Held-out residual std (binned) of a fit of the model's features plus `extra`: pooled over the
-/// splits as the root of the bin-weighted mean variance.
-fn heldout_std(info: &ModelInfo, roles: &Roles, splits: &[Split], extra: &[String]) -> Result<f64> {
+/// splits as the root of the bin-weighted mean variance, and per split.
+fn heldout_std(
+    info: &ModelInfo,
+    roles: &Roles,
+    splits: &[Split],
+    extra: &[String],
+) -> Result<HeldOutFigures> {
     let mut o = FitOptions::new(&roles.target, &[]);
     o.time.clone_from(&roles.time);
     o.reference.clone_from(&roles.reference);
@@ -71,6 +84,7 @@ fn heldout_std(info: &ModelInfo, roles: &Roles, splits: &[Split], extra: &[Strin
     o.spec.features.clone_from(&info.spec.features);
     o.spec.features.extend(extra.iter().cloned());
     let (mut sum, mut count) = (0.0f64, 0usize);
+    let mut each = Vec::with_capacity(splits.len());
     for sp in splits {
         let fitted = tcomp_train::fit(&sp.train, &o)?;
         let bytes = fitted.model.to_bytes()?;
@@ -79,12 +93,14 @@ fn heldout_std(info: &ModelInfo, roles: &Roles, splits: &[Split], extra: &[Strin
         let b = metrics::report(&run, sp.bin_s).binned;
         sum += b.residual_std.powi(2) * b.bins as f64;
         count += b.bins;
+        each.push(b.residual_std);
     }
-    Ok(if count > 0 {
+    let pooled = if count > 0 {
         (sum / count as f64).sqrt()
     } else {
         f64::NAN
-    })
+    };
+    Ok((pooled, each))
 }
 
 /// The rows of `data` whose time is outside `[lo, hi)`.
@@ -182,7 +198,7 @@ pub fn confirm(
     order.truncate(opts.top);
     let mut jobs: Vec<Option<usize>> = vec![None];
     jobs.extend(order.iter().map(|&i| Some(i)));
-    let results: Vec<Result<f64>> = jobs
+    let results: Vec<Result<HeldOutFigures>> = jobs
         .par_iter()
         .map(|job| {
             let extra = job
@@ -192,8 +208,8 @@ pub fn confirm(
         })
         .collect();
     let mut results = results.into_iter();
-    let before = results.next().unwrap_or(Ok(f64::NAN))?;
-    let mut outcome: Vec<(usize, std::result::Result<f64, String>)> = Vec::new();
+    let (before, before_each) = results.next().unwrap_or(Ok((f64::NAN, Vec::new())))?;
+    let mut outcome: Vec<(usize, std::result::Result<HeldOutFigures, String>)> = Vec::new();
     for (&i, r) in order.iter().zip(results) {
         outcome.push((i, r.map_err(|e| e.to_string())));
     }
@@ -207,18 +223,30 @@ pub fn confirm(
     for (i, r) in outcome {
         let Some(c) = cands.get_mut(i) else { continue };
         match r {
-            Ok(after) => {
+            Ok((after, after_each)) => {
                 let improvement_pct = 100.0 * (1.0 - after / before);
+                let splits_improved = after_each
+                    .iter()
+                    .zip(&before_each)
+                    .filter(|(a, b)| a < b)
+                    .count();
+                let n = after_each.len();
                 c.confirmation = Some(Confirmation {
                     residual_std_before: before,
                     residual_std_after: after,
                     improvement_pct,
                     heldout: heldout.clone(),
+                    splits_improved,
+                    splits: n,
                 });
                 c.residual_std_before = before;
                 c.residual_std_after = after;
                 c.improvement_pct = improvement_pct;
-                c.unconfirmed = None;
+                // With blocks, a real effect lowers the residual in most of them; a pooled gain that
+                // one block carries is more likely that block's drift.
+                c.unconfirmed = (n > 1 && 2 * splits_improved <= n).then(|| {
+                    format!("lowers the held-out residual in only {splits_improved} of {n} blocks")
+                });
             }
             Err(e) => c.unconfirmed = Some(format!("the refit with it failed: {e}")),
         }
