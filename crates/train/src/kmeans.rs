@@ -26,20 +26,24 @@ pub fn dist2(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// `k` centers of the rows `points` (k-means++ seeding, then Lloyd). Returns fewer than `k` when
-/// there are fewer distinct points.
+/// there are fewer distinct points. Works on flat row-major copies (the search of `bayes` calls it
+/// often); the arithmetic is the plain per-row one, so results do not depend on the layout.
 pub fn kmeans(points: &[Vec<f64>], k: usize, seed: u64) -> Vec<Vec<f64>> {
     let n = points.len();
-    if k == 0 || n == 0 {
+    let dim = points.first().map_or(0, Vec::len);
+    if k == 0 || n == 0 || dim == 0 {
         return Vec::new();
     }
+    let flat: Vec<f64> = points
+        .iter()
+        .flat_map(|p| (0..dim).map(move |j| p.get(j).copied().unwrap_or(0.0)))
+        .collect();
+    let row = |i: usize| flat.get(i * dim..(i + 1) * dim).unwrap_or(&[]);
     let mut rng = SplitMix(seed);
     let first = ((rng.next_f64() * n as f64) as usize).min(n - 1);
-    let mut centers: Vec<Vec<f64>> = points.get(first).cloned().into_iter().collect();
-    let mut d2: Vec<f64> = points
-        .iter()
-        .map(|p| dist2(p, centers.first().map_or(&[][..], Vec::as_slice)))
-        .collect();
-    while centers.len() < k {
+    let mut centers: Vec<f64> = row(first).to_vec();
+    let mut d2: Vec<f64> = (0..n).map(|i| dist2(row(i), row(first))).collect();
+    while centers.len() / dim < k {
         let total: f64 = d2.iter().sum();
         if total <= 0.0 {
             break;
@@ -53,20 +57,29 @@ pub fn kmeans(points: &[Vec<f64>], k: usize, seed: u64) -> Vec<Vec<f64>> {
                 break;
             }
         }
-        let Some(c) = points.get(pick).cloned() else {
-            break;
-        };
-        for (d, p) in d2.iter_mut().zip(points) {
-            *d = d.min(dist2(p, &c));
+        let c = row(pick).to_vec();
+        for (i, d) in d2.iter_mut().enumerate() {
+            *d = d.min(dist2(row(i), &c));
         }
-        centers.push(c);
+        centers.extend_from_slice(&c);
     }
-    let dim = points.first().map_or(0, Vec::len);
+    let kk = centers.len() / dim;
     let mut assign = vec![usize::MAX; n];
+    let mut sums = vec![0.0; kk * dim];
+    let mut counts = vec![0usize; kk];
     for _ in 0..100 {
         let mut changed = false;
-        for (a, p) in assign.iter_mut().zip(points) {
-            let best = nearest(&centers, p);
+        for (i, a) in assign.iter_mut().enumerate() {
+            let p = row(i);
+            let mut best = 0;
+            let mut bd = f64::INFINITY;
+            for (j, c) in centers.chunks_exact(dim).enumerate() {
+                let d = dist2(c, p);
+                if d < bd {
+                    bd = d;
+                    best = j;
+                }
+            }
             if *a != best {
                 *a = best;
                 changed = true;
@@ -75,23 +88,29 @@ pub fn kmeans(points: &[Vec<f64>], k: usize, seed: u64) -> Vec<Vec<f64>> {
         if !changed {
             break;
         }
-        let mut sums = vec![vec![0.0; dim]; centers.len()];
-        let mut counts = vec![0usize; centers.len()];
-        for (a, p) in assign.iter().zip(points) {
-            if let (Some(s), Some(c)) = (sums.get_mut(*a), counts.get_mut(*a)) {
-                for (sv, pv) in s.iter_mut().zip(p) {
+        sums.fill(0.0);
+        counts.fill(0);
+        for (i, &a) in assign.iter().enumerate() {
+            if let (Some(s), Some(c)) = (sums.get_mut(a * dim..(a + 1) * dim), counts.get_mut(a)) {
+                for (sv, pv) in s.iter_mut().zip(row(i)) {
                     *sv += pv;
                 }
                 *c += 1;
             }
         }
-        for ((c, s), cnt) in centers.iter_mut().zip(sums).zip(counts) {
+        for ((c, s), &cnt) in centers
+            .chunks_exact_mut(dim)
+            .zip(sums.chunks_exact(dim))
+            .zip(&counts)
+        {
             if cnt > 0 {
-                *c = s.into_iter().map(|v| v / cnt as f64).collect();
+                for (cv, sv) in c.iter_mut().zip(s) {
+                    *cv = sv / cnt as f64;
+                }
             }
         }
     }
-    centers
+    centers.chunks_exact(dim).map(<[f64]>::to_vec).collect()
 }
 
 /// Index of the center nearest to `p`.
