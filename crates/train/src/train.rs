@@ -293,8 +293,33 @@ fn check_features(spec: &FeatureSpec, x: &[Vec<f64>], collinear: bool) -> Result
     Ok(())
 }
 
-/// Trains a model on `data` (restricted to `opts.from..opts.until` when given).
-pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
+/// Everything `fit` derives from the data before a method runs: the selected rows, the stored
+/// program, feature ranges, and the (binned) training rows the method sees.
+struct Prepared {
+    data: Dataset,
+    spec: FeatureSpec,
+    ranges: Vec<FeatureRange>,
+    reference_value: Option<f64>,
+    average_s: f64,
+    /// Training rows (raw feature units), one per bin.
+    x: Vec<Vec<f64>>,
+    /// Error (target − reference), one per bin.
+    y: Vec<f64>,
+    warnings: Vec<String>,
+}
+
+/// The rows a method is fitted on: features computed by the core's program over `data` (restricted
+/// to `opts.from..opts.until`), averaged into `opts.average_s` bins — `(x, y)`, one row per bin.
+/// Benchmarks and comparisons with other fitters use it to hand every fitter the same numbers.
+pub fn training_rows(
+    data: &Dataset,
+    opts: &FitOptions,
+) -> Result<(Vec<Vec<f64>>, Vec<f64>), TrainError> {
+    let p = prepare(data, opts)?;
+    Ok((p.x, p.y))
+}
+
+fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
     let mut warnings = Vec::new();
     let data = if opts.from.is_some() || opts.until.is_some() {
         data.select_time(
@@ -411,6 +436,31 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
                 .collect()
         })
         .collect();
+    Ok(Prepared {
+        data,
+        spec,
+        ranges,
+        reference_value,
+        average_s,
+        x,
+        y,
+        warnings,
+    })
+}
+
+/// Trains a model on `data` (restricted to `opts.from..opts.until` when given).
+pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
+    let Prepared {
+        data,
+        spec,
+        ranges,
+        reference_value,
+        average_s,
+        x,
+        y,
+        warnings,
+    } = prepare(data, opts)?;
+    let time = data.time(&opts.time)?;
     let centers = opts.centers.unwrap_or(DEFAULT_CENTERS);
     let need = match opts.method {
         Method::Bayes => 10,
