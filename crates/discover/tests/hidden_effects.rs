@@ -145,7 +145,7 @@ fn hidden_lagged_element() {
         &[Poly, Rate, LaggedElement],
         Some(LaggedElement),
     );
-    // Not within the 1.2× target: measured 1.26× since the trainer's Occam rules (1.13× before,
+    // Not within the 1.2× target: measured 1.26× since the trainer’s Occam rules (1.13× before,
     // with the diagnosis' τ = 20 min; 1.63× then with the true τ = 40 min). The verification run
     // goes to −10 °C after training at 10–40 °C, and the evidence cannot see extrapolation.
     check_found_within(&o, Kind::LaggedElement, 1.3);
