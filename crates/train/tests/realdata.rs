@@ -101,8 +101,9 @@ fn mems_cycle_bayes_t_ties_poly3_and_never_hurts() {
 /// With the rate of temperature as a second feature (the thermal gradients inside the package
 /// follow dT/dt), the hysteresis is modelled: on the three accelerometers the verify RMS falls to
 /// 0.19–0.58 of poly3's (measured). It is not the answer on every channel: on gyro_z the training
-/// run's first cooling runs above the heating branch (a power-on transient) and the verification's
-/// below it, so the rate term learned in training doubles the verify error — while the log evidence
+/// run's cooling runs above the heating branch and the verification's cooling below it (a drift
+/// temperature does not explain; leaving the first 5 or 10 minutes out of training does not remove
+/// it), so the rate term learned in training doubles the verify error — while the log evidence
 /// prefers (T, rate) over (T) on every channel, gyro_z included. Training data alone cannot tell.
 #[test]
 fn mems_cycle_rate_feature_pays_on_accelerometers() {
