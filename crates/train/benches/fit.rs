@@ -12,25 +12,10 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use tcomp_train::bayes::{self, BayesOptions};
-use tcomp_train::{Dataset, FitOptions, fit};
+use tcomp_train::{Dataset, fit};
 
-fn rlg_options() -> FitOptions {
-    let mut o = FitOptions::new(
-        "gyro_dph",
-        &[
-            "T",
-            "rate(T)",
-            "t_anode_c - t_shell_c",
-            "t_cathode_c - t_shell_c",
-        ],
-    );
-    o.spec
-        .signals
-        .push("T = mean(t_anode_c, t_cathode_c, t_shell_c)".into());
-    o.reference = Some("ref_dph".into());
-    o.centers = Some(32);
-    o
-}
+#[path = "support/rlg_case.rs"]
+mod rlg_case;
 
 fn benches(c: &mut Criterion) {
     let p = tcomp_sim::presets::preset("rlg").unwrap().with_seed(1);
@@ -45,7 +30,7 @@ fn benches(c: &mut Criterion) {
     }
     w.flush().unwrap();
     let data = Dataset::load(&csv).unwrap();
-    let opts = rlg_options();
+    let opts = rlg_case::options();
     let binned = tcomp_train::train::training_rows(&data, &opts).unwrap();
 
     let mut g = c.benchmark_group("trainer");

@@ -16,23 +16,8 @@ use std::time::Instant;
 use tcomp_train::dataset::segments;
 use tcomp_train::{Dataset, FitOptions, Roles, blob_io, evaluate, features, fit};
 
-fn options() -> FitOptions {
-    let mut o = FitOptions::new(
-        "gyro_dph",
-        &[
-            "T",
-            "rate(T)",
-            "t_anode_c - t_shell_c",
-            "t_cathode_c - t_shell_c",
-        ],
-    );
-    o.spec
-        .signals
-        .push("T = mean(t_anode_c, t_cathode_c, t_shell_c)".into());
-    o.reference = Some("ref_dph".into());
-    o.centers = Some(32);
-    o
-}
+#[path = "../benches/support/rlg_case.rs"]
+mod rlg_case;
 
 fn write_rows(data: &Dataset, opts: &FitOptions, path: &Path) {
     let program = opts.spec.program().unwrap();
@@ -64,7 +49,7 @@ fn main() {
     std::fs::create_dir_all(out).unwrap();
     let train = Dataset::load(&sim.join("train.csv")).unwrap();
     let verify = Dataset::load(&sim.join("verify.csv")).unwrap();
-    let opts = options();
+    let opts = rlg_case::options();
     write_rows(&train, &opts, &out.join("train_rows.csv"));
     write_rows(&verify, &opts, &out.join("verify_rows.csv"));
     let (x, y) = tcomp_train::train::training_rows(&train, &opts).unwrap();

@@ -15,43 +15,18 @@ struct Case {
     floor: f64,
     o: FitOptions,
 }
-fn sim(name: &str, feats: Option<Vec<String>>, physics: bool) -> Case {
-    let p = tcomp_sim::presets::preset(name).unwrap().with_seed(1);
-    let (tt, truth) = tcomp_sim::simulate(&p.train).unwrap();
-    let (vt, vtruth) = tcomp_sim::simulate(&p.verify).unwrap();
-    let mut phys: Vec<String> = Vec::new();
-    for e in &truth.effects {
-        for x in &e.expressions {
-            if !phys.contains(x) {
-                phys.push(x.clone());
-            }
-        }
-    }
-    let mut o = FitOptions::new(&truth.columns.target, &[]);
-    o.spec.signals = truth
-        .true_features
-        .signals
-        .iter()
-        .map(|(k, v)| format!("{k} = {v}"))
-        .collect();
-    o.spec.features = feats.unwrap_or(if physics {
-        phys
-    } else {
-        truth.true_features.features.clone()
-    });
-    o.reference = Some(truth.columns.reference.clone());
-    Case {
-        name: format!("{name}{}", if physics { "-phys" } else { "" }),
-        train: Dataset::from_columns("t", tt.names, tt.columns),
-        verify: Dataset::from_columns("v", vt.names, vt.columns),
-        floor: vtruth.noise.std_100s,
-        o,
-    }
+/// Which features a simulated case is fitted with.
+enum Feats {
+    /// The truth's minimal feature list.
+    True,
+    /// Every expression of every effect.
+    Physics,
+    /// These.
+    Given(Vec<String>),
 }
-fn effects(name: &str, sensor: tcomp_sim::SensorKind, eff: &[tcomp_sim::EffectKind]) -> Case {
-    let p = tcomp_sim::presets::with_effects(sensor, eff)
-        .unwrap()
-        .with_seed(11);
+
+/// A case from a preset: train on its training run, measure on its verification run.
+fn case_of(name: &str, p: &tcomp_sim::Preset, feats: Feats) -> Case {
     let (tt, truth) = tcomp_sim::simulate(&p.train).unwrap();
     let (vt, vtruth) = tcomp_sim::simulate(&p.verify).unwrap();
     let mut o = FitOptions::new(&truth.columns.target, &[]);
@@ -61,7 +36,19 @@ fn effects(name: &str, sensor: tcomp_sim::SensorKind, eff: &[tcomp_sim::EffectKi
         .iter()
         .map(|(k, v)| format!("{k} = {v}"))
         .collect();
-    o.spec.features = truth.true_features.features.clone();
+    o.spec.features = match feats {
+        Feats::True => truth.true_features.features.clone(),
+        Feats::Given(f) => f,
+        Feats::Physics => {
+            let mut phys: Vec<String> = Vec::new();
+            for x in truth.effects.iter().flat_map(|e| &e.expressions) {
+                if !phys.contains(x) {
+                    phys.push(x.clone());
+                }
+            }
+            phys
+        }
+    };
     o.reference = Some(truth.columns.reference.clone());
     Case {
         name: name.into(),
@@ -71,6 +58,28 @@ fn effects(name: &str, sensor: tcomp_sim::SensorKind, eff: &[tcomp_sim::EffectKi
         o,
     }
 }
+
+fn sim(name: &str, feats: Option<Vec<String>>, physics: bool) -> Case {
+    let p = tcomp_sim::presets::preset(name).unwrap().with_seed(1);
+    let f = match (feats, physics) {
+        (Some(f), _) => Feats::Given(f),
+        (None, true) => Feats::Physics,
+        (None, false) => Feats::True,
+    };
+    case_of(
+        &format!("{name}{}", if physics { "-phys" } else { "" }),
+        &p,
+        f,
+    )
+}
+
+fn effects(name: &str, sensor: tcomp_sim::SensorKind, eff: &[tcomp_sim::EffectKind]) -> Case {
+    let p = tcomp_sim::presets::with_effects(sensor, eff)
+        .unwrap()
+        .with_seed(11);
+    case_of(name, &p, Feats::True)
+}
+
 fn main() {
     let mut cases = vec![
         sim("qma", None, false),
