@@ -16,6 +16,20 @@ pub const F: usize = HOST_FEATURES;
 /// Program nodes on the host.
 pub const N: usize = HOST_NODES;
 
+/// Features per model on the firmware (`firmware/src/app.rs`'s `FEATURES`).
+pub const FLIGHT_FEATURES: usize = 4;
+/// Program nodes on the firmware (`firmware/src/app.rs`'s `NODES`).
+pub const FLIGHT_NODES: usize = 16;
+
+/// Whether `spec` compiles into the firmware's program capacity. The trainer only adds features of
+/// its own (the cubic basis of `bayes`) when it does; what the user asks for is theirs to size.
+pub fn fits_flight(spec: &FeatureSpec) -> bool {
+    let mut b = ProgramBuilder::<FLIGHT_NODES, FLIGHT_FEATURES>::new();
+    spec.signals.iter().all(|s| b.line(s).is_ok())
+        && spec.features.iter().all(|f| b.feature(f).is_ok())
+        && b.finish().is_ok()
+}
+
 /// The source of a feature program: named signals (`NAME = EXPR`) and feature expressions.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct FeatureSpec {

@@ -7,7 +7,7 @@
 //! f64, store f32 coefficients, then decode the blob and run it through the core's `Channel` over the
 //! training data to report the training residual.
 
-use crate::bayes::{self, BayesOptions, Evidence};
+use crate::bayes::{self, Basis, BayesOptions, Evidence};
 use crate::blob_io::OwnedModel;
 use crate::dataset::{DataError, Dataset, segments};
 use crate::error::TrainError;
@@ -231,6 +231,10 @@ pub struct FitSummary {
     pub evidence: Option<Evidence>,
     /// Settings whose evidence was compared (bayes).
     pub settings_evaluated: usize,
+    /// The basis the evidence chose (bayes): Gaussians, or the cubic in the first feature.
+    pub basis: Option<Basis>,
+    /// Log evidence of the best model of the other basis (bayes, when the cubic was offered).
+    pub other_basis_log_evidence: Option<f64>,
     /// Training rows.
     pub train_rows: usize,
     /// Training samples after averaging.
@@ -305,7 +309,18 @@ struct Prepared {
     x: Vec<Vec<f64>>,
     /// Error (target − reference), one per bin.
     y: Vec<f64>,
+    /// The cubic basis offered to `bayes`, when it is and fits the firmware.
+    cubic: Option<CubicBasis>,
     warnings: Vec<String>,
+}
+
+/// The cubic in the first feature as `bayes` may choose it: the program with `Tclamped =
+/// clamp(first feature, trained range)` and the features `sq(Tclamped)`, `Tclamped * sq(Tclamped)`
+/// appended, their two ranges, and their binned values (computed by that program, like `x`).
+struct CubicBasis {
+    spec: FeatureSpec,
+    ranges: [FeatureRange; 2],
+    rows: Vec<Vec<f64>>,
 }
 
 /// The rows a method is fitted on: features computed by the core's program over `data` (restricted
@@ -436,6 +451,11 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
                 .collect()
         })
         .collect();
+    let cubic = if opts.method == Method::Bayes && opts.linear && opts.centers.is_none() {
+        cubic_basis(&spec, &data, time, &starts, &ranges, &b)?
+    } else {
+        None
+    };
     Ok(Prepared {
         data,
         spec,
@@ -444,8 +464,63 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
         average_s,
         x,
         y,
+        cubic,
         warnings,
     })
+}
+
+/// The cubic basis for `spec`, or `None` when the program with it would not fit the firmware
+/// ([`features::fits_flight`]) or the first feature does not vary.
+fn cubic_basis(
+    spec: &FeatureSpec,
+    data: &Dataset,
+    time: &[f64],
+    starts: &[usize],
+    ranges: &[FeatureRange],
+    b: &[(usize, usize)],
+) -> Result<Option<CubicBasis>, TrainError> {
+    let (Some(expr), Some(r)) = (spec.features.first(), ranges.first()) else {
+        return Ok(None);
+    };
+    if r.hi.is_nan() || r.lo.is_nan() || r.hi <= r.lo {
+        return Ok(None);
+    }
+    let (sig, feats) = crate::poly3::program_lines(expr, f64::from(r.lo), f64::from(r.hi));
+    let mut augmented = spec.clone();
+    augmented.signals.push(sig);
+    augmented.features.extend(feats.into_iter().skip(1));
+    if !features::fits_flight(&augmented) {
+        return Ok(None);
+    }
+    let nf = spec.features.len();
+    let feats = features::compute(&augmented.program()?, data, time, starts)?;
+    let mut out = [FeatureRange { lo: 0.0, hi: 0.0 }; 2];
+    let mut cols = Vec::with_capacity(2);
+    for (k, range) in out.iter_mut().enumerate() {
+        let c: Vec<f64> = feats.iter().map(|r| f64::from(r[nf + k])).collect();
+        let (lo, hi) = c
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        *range = FeatureRange {
+            lo: lo as f32,
+            hi: hi as f32,
+        };
+        cols.push(bin_mean(&c, b));
+    }
+    let rows = (0..b.len())
+        .map(|i| {
+            cols.iter()
+                .map(|c| c.get(i).copied().unwrap_or(0.0))
+                .collect()
+        })
+        .collect();
+    Ok(Some(CubicBasis {
+        spec: augmented,
+        ranges: out,
+        rows,
+    }))
 }
 
 /// Trains a model on `data` (restricted to `opts.from..opts.until` when given).
@@ -458,8 +533,10 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
         average_s,
         x,
         y,
+        cubic,
         warnings,
     } = prepare(data, opts)?;
+    let (mut spec, mut ranges) = (spec, ranges);
     let time = data.time(&opts.time)?;
     let centers = opts.centers.unwrap_or(DEFAULT_CENTERS);
     let need = match opts.method {
@@ -485,6 +562,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
     let mut length_scales = Vec::new();
     let mut settings_evaluated = 0;
     let mut width = 0.0;
+    let mut basis = None;
     let rbf: Rbf64 = match opts.method {
         Method::Bayes => {
             let bo = BayesOptions {
@@ -492,9 +570,15 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
                 centers: opts.centers,
                 seed: opts.seed,
             };
-            let f = bayes::fit(&x, &y, &bo).ok_or_else(|| {
+            let offered = cubic.as_ref().map(|c| c.rows.as_slice());
+            let f = bayes::fit_offering_cubic(&x, &y, offered, &bo).ok_or_else(|| {
                 TrainError::Invalid("the evidence iteration failed on every setting".into())
             })?;
+            if let (Basis::Cubic, Some(c)) = (f.basis, cubic) {
+                spec = c.spec;
+                ranges.extend(c.ranges);
+            }
+            basis = Some((f.basis, f.other_basis_log_evidence));
             evidence = Some(f.evidence);
             length_scales = f.length_scales;
             settings_evaluated = f.evaluated;
@@ -554,6 +638,8 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
         linear: rbf.linear.clone(),
         evidence,
         settings_evaluated,
+        basis: basis.map(|b| b.0),
+        other_basis_log_evidence: basis.and_then(|b| b.1),
         train_rows: data.len(),
         train_bins: y.len(),
         average_s,

@@ -66,10 +66,12 @@ fn load(name: &str) -> Option<Dataset> {
 
 /// The issue's second clause, and what holds of the first. With the die temperature alone, the
 /// verification (the final cooling, 74 → 36 °C) runs along the cooling branch of a hysteresis loop
-/// that no function of T can reach, so `bayes` and the cubic tie: measured bayes/poly3 0.96–1.07,
-/// the same spread as between RBF structures whose log evidences differ by less than 1. Asserted:
-/// never worse than raw by more than 5 % (the evidence keeps low-dependence channels nearly flat),
-/// and within 8 % of poly3 on every channel.
+/// that no function of T can reach, so every model of T ties: the Gaussian models `bayes` finds are
+/// within 3 nats of log evidence of the cubic basis it is offered, and it keeps the simpler, the
+/// cubic under MacKay's prior, on all six channels (measured bayes/poly3 0.959–1.008; before the cubic
+/// basis was offered, the Gaussian models measured 0.963–1.074). Asserted: never worse than raw by
+/// more than 5 % (the evidence keeps low-dependence channels nearly flat), and within 2 % of poly3 on
+/// every channel.
 #[test]
 fn mems_cycle_bayes_t_ties_poly3_and_never_hurts() {
     let Some(d) = load("mems_thermal_cycle.csv") else {
@@ -90,7 +92,7 @@ fn mems_cycle_bayes_t_ties_poly3_and_never_hurts() {
         );
         assert!(b.residual_rms <= 1.05 * b.raw_rms, "{ch}: worse than raw");
         assert!(
-            b.residual_rms <= 1.08 * p.residual_rms,
+            b.residual_rms <= 1.02 * p.residual_rms,
             "{ch}: behind poly3"
         );
         wins += usize::from(b.residual_rms <= p.residual_rms);
@@ -148,10 +150,11 @@ fn lsm6dsm_ramp_table() {
 }
 
 /// Issue 4's literal target: bayes no worse than poly3 on every MEMS channel. Not met by an honest
-/// method on this record (see the two tests above): with (T) it is a tie decided by the hysteresis
-/// branch (acc_x +2 %, acc_z +7 %, gyro_z +1 % measured), with (T, rate) gyro_z doubles.
+/// method on this record (see the two tests above): with (T) `bayes` chooses the cubic, and the
+/// prior's shrinkage of its weights leaves gyro_x, gyro_y and acc_y 0.3–0.8 % behind the least-squares
+/// cubic (and gyro_z, acc_z 4 % and 1 % ahead); with (T, rate) gyro_z doubles.
 #[test]
-#[ignore = "issue target not met on this record: bayes(T) ties poly3 within hysteresis (acc_x +2 %, acc_z +7 %); bayes(T, rate) doubles gyro_z"]
+#[ignore = "issue target not met on this record: bayes(T) is the Bayesian cubic, 0.3-0.8 % behind least squares on 3 channels; bayes(T, rate) doubles gyro_z"]
 fn mems_cycle_no_worse_than_poly3_everywhere() {
     let Some(d) = load("mems_thermal_cycle.csv") else {
         return;

@@ -2,6 +2,7 @@
 use anyhow::Context;
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
+use tcomp_train::bayes::Basis;
 use tcomp_train::{Dataset, FitOptions, FitSummary, Spec};
 
 /// Arguments of `tcomp fit`.
@@ -144,6 +145,15 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
         println!("feature     {f}{ls}{lin}");
     }
     println!("centers     {} (width σ = {:.3})", s.centers, s.width);
+    match (s.basis, s.other_basis_log_evidence) {
+        (Some(Basis::Cubic), Some(other)) => println!(
+            "basis       cubic in the first feature (chosen by evidence; the best Gaussian model's log evidence is {other:.2})"
+        ),
+        (Some(Basis::Gaussians), Some(other)) => println!(
+            "basis       Gaussians (chosen by evidence; the cubic in the first feature scored {other:.2})"
+        ),
+        _ => {}
+    }
     if let Some(e) = &s.evidence {
         println!(
             "evidence    α = {:.4e}  α_linear = {:.4e}  β = {:.4e}  γ = {:.2}  log evidence = {:.2}  ({} settings compared, {} iterations)",
