@@ -79,8 +79,8 @@ fn expr_error(expr: &str, e: &tcomp_core::ParseError) -> TrainError {
 }
 
 /// Input columns of a program, as f64 slices of the dataset (in program input order).
-pub fn input_columns<'d>(
-    program: &Program<'_, N, F>,
+pub fn input_columns<'d, const N2: usize, const F2: usize>(
+    program: &Program<'_, N2, F2>,
     data: &'d Dataset,
 ) -> Result<Vec<&'d [f64]>, TrainError> {
     program

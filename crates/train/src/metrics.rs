@@ -73,8 +73,46 @@ pub struct Run {
 
 /// Runs the model through a core [`Channel`] over `data`, resetting at gaps. `temperature` names the
 /// column used for segment detection (default: the program's first input).
+///
+/// A model of at most [`crate::features::FLIGHT_FEATURES`] features runs in the firmware's
+/// feature capacity (re-decoded from its own blob into 4-feature types): it is the code path that
+/// flies, and it does half the work of the host's 8-wide types. The two give the same numbers —
+/// features past `n_features` are exact zeros, so they add exact zeros — which
+/// `sim_accuracy`'s `narrow_and_wide_runs_agree` checks.
 pub fn run_model(
     model: &Model<'_, C, F, N>,
+    data: &Dataset,
+    roles: &Roles,
+    temperature: Option<&str>,
+    gap_s: Option<f64>,
+) -> Result<Run, TrainError> {
+    if usize::from(model.rbf.n_features) <= crate::features::FLIGHT_FEATURES {
+        let mut buf = vec![0u8; crate::blob_io::MAX_BLOB];
+        let narrow = model
+            .encode(&mut buf)
+            .ok()
+            .and_then(|len| buf.get(..len))
+            .and_then(|b| Model::<'_, C, { crate::features::FLIGHT_FEATURES }, N>::decode(b).ok());
+        if let Some(m) = narrow {
+            return run_in(&m, data, roles, temperature, gap_s);
+        }
+    }
+    run_in(model, data, roles, temperature, gap_s)
+}
+
+/// [`run_model`] at the model's own capacity (tests compare the two).
+pub fn run_wide(
+    model: &Model<'_, C, F, N>,
+    data: &Dataset,
+    roles: &Roles,
+    temperature: Option<&str>,
+    gap_s: Option<f64>,
+) -> Result<Run, TrainError> {
+    run_in(model, data, roles, temperature, gap_s)
+}
+
+fn run_in<const C2: usize, const F2: usize, const N2: usize>(
+    model: &Model<'_, C2, F2, N2>,
     data: &Dataset,
     roles: &Roles,
     temperature: Option<&str>,
@@ -92,7 +130,7 @@ pub fn run_model(
         None => vec![0.0; data.len()],
     };
     let starts = segments(time, gap_s);
-    let mut ch = Channel::<N, F>::new(1.0);
+    let mut ch = Channel::<N2, F2>::new(1.0);
     let mut inputs = vec![0.0f32; cols.len()];
     let mut run = Run {
         time: time.to_vec(),

@@ -138,3 +138,36 @@ fn shupe_product_feature_helps_the_ifog() {
     );
     assert!(r3 < r2, "(T, dT, T*dT) {r3:.2} vs (T, dT) {r2:.2}");
 }
+
+/// `run_model` runs a model of ≤ 4 features in the firmware's 4-feature types; the host's 8-wide
+/// types must give the very same numbers (features past `n_features` are exact zeros). A 32-center
+/// RLG model over its verification run: every residual equal, bit for bit.
+#[test]
+fn narrow_and_wide_runs_agree() {
+    let p = pair("rlg");
+    let mut o = FitOptions::new(&p.target, &[]);
+    o.spec.signals = p.signals.clone();
+    o.spec.features = p.features.clone();
+    o.reference = Some(p.reference.clone());
+    o.centers = Some(32);
+    let f = fit(&p.train, &o).unwrap();
+    let bytes = f.model.to_bytes().unwrap();
+    let m = blob_io::decode(std::path::Path::new("mem"), &bytes).unwrap();
+    assert_eq!(m.rbf.n_features, 4);
+    assert_eq!(m.rbf.centers.len(), 32);
+    let roles = Roles::of_model(&m);
+    let narrow = tcomp_train::metrics::run_model(&m, &p.verify, &roles, None, None).unwrap();
+    let wide = tcomp_train::metrics::run_wide(&m, &p.verify, &roles, None, None).unwrap();
+    assert_eq!(narrow.residual.len(), p.verify.len());
+    let differ = narrow
+        .residual
+        .iter()
+        .zip(&wide.residual)
+        .filter(|(a, b)| a.to_bits() != b.to_bits())
+        .count();
+    assert_eq!(
+        differ, 0,
+        "{differ} residuals differ between 4- and 8-wide types"
+    );
+    assert_eq!(narrow.out_of_range, wide.out_of_range);
+}
