@@ -2,7 +2,8 @@
 //!
 //! The pipeline: [`dataset`] loads a measurement CSV with precise errors; [`features`] runs the
 //! core's feature program over it (the code the firmware runs); a method fits an RBF in f64 —
-//! [`bayes`] (default, MacKay evidence), [`mse`], [`gradient`] or the [`poly3`] baseline; [`blob_io`]
+//! [`bayes`] (default, MacKay evidence), [`mse`] (centers by k-means or [`ols`]), [`gradient`] or
+//! the [`poly3`] baseline; [`blob_io`]
 //! stores it as the core's blob; [`metrics`] measures it by running the decoded blob through the
 //! core's f32 `Channel`. [`train::fit`] ties it together for `tcomp fit`; [`spec`] reads the TOML spec.
 //!
@@ -26,6 +27,7 @@ pub mod gradient;
 pub mod kmeans;
 pub mod metrics;
 pub mod mse;
+pub mod ols;
 pub mod poly3;
 pub mod rbf64;
 pub mod spec;

@@ -42,6 +42,10 @@ pub struct Spec {
     pub centers: Option<usize>,
     /// Linear term on/off.
     pub linear: Option<bool>,
+    /// Offer `bayes` the cubic basis (default true).
+    pub cubic: Option<bool>,
+    /// Center selection of `mse`: `kmeans` (default) or `ols`.
+    pub select: Option<String>,
     /// Gap threshold (s).
     pub gap: Option<f64>,
     /// k-means seed.
@@ -88,6 +92,8 @@ impl Spec {
             method,
             centers,
             linear,
+            cubic,
+            select,
             gap,
             seed,
             iterations,

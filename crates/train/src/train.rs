@@ -13,6 +13,7 @@ use crate::dataset::{DataError, Dataset, segments};
 use crate::error::TrainError;
 use crate::features::{self, FeatureSpec, bin_mean, bins};
 use crate::metrics::{self, EvalReport, Roles};
+use crate::mse::CenterSelection;
 use crate::rbf64::Rbf64;
 use crate::spec::Spec;
 use serde::Serialize;
@@ -112,6 +113,10 @@ pub struct FitOptions {
     pub centers: Option<usize>,
     /// Linear term (bayes).
     pub linear: bool,
+    /// Offer `bayes` the cubic in the first feature as a basis (chosen only by evidence).
+    pub cubic: bool,
+    /// How `mse` places its centers.
+    pub select: CenterSelection,
     /// Gap threshold (s); default 10× the median step.
     pub gap_s: Option<f64>,
     /// k-means seed.
@@ -146,6 +151,8 @@ impl FitOptions {
             average_s: None,
             centers: None,
             linear: true,
+            cubic: true,
+            select: CenterSelection::Kmeans,
             gap_s: None,
             seed: 1,
             iterations: 2000,
@@ -187,6 +194,12 @@ impl FitOptions {
         o.centers = spec.centers;
         if let Some(l) = spec.linear {
             o.linear = l;
+        }
+        if let Some(c) = spec.cubic {
+            o.cubic = c;
+        }
+        if let Some(s) = &spec.select {
+            o.select = s.parse()?;
         }
         o.gap_s = spec.gap;
         if let Some(s) = spec.seed {
@@ -231,6 +244,8 @@ pub struct FitSummary {
     pub evidence: Option<Evidence>,
     /// Settings whose evidence was compared (bayes).
     pub settings_evaluated: usize,
+    /// How the centers were placed (mse).
+    pub select: Option<CenterSelection>,
     /// The basis the evidence chose (bayes): Gaussians, or the cubic in the first feature.
     pub basis: Option<Basis>,
     /// Log evidence of the best model of the other basis (bayes, when the cubic was offered).
@@ -451,11 +466,12 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
                 .collect()
         })
         .collect();
-    let cubic = if opts.method == Method::Bayes && opts.linear && opts.centers.is_none() {
-        cubic_basis(&spec, &data, time, &starts, &ranges, &b)?
-    } else {
-        None
-    };
+    let cubic =
+        if opts.method == Method::Bayes && opts.linear && opts.cubic && opts.centers.is_none() {
+            cubic_basis(&spec, &data, time, &starts, &ranges, &b)?
+        } else {
+            None
+        };
     Ok(Prepared {
         data,
         spec,
@@ -534,7 +550,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
         x,
         y,
         cubic,
-        warnings,
+        mut warnings,
     } = prepare(data, opts)?;
     let (mut spec, mut ranges) = (spec, ranges);
     let time = data.time(&opts.time)?;
@@ -585,7 +601,17 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
             width = f.width;
             f.rbf
         }
-        Method::Mse => crate::mse::fit(&x, &y, centers, opts.seed)?,
+        Method::Mse => {
+            let f = crate::mse::fit_selecting(&x, &y, centers, opts.seed, opts.select)?;
+            if f.centers.len() < centers {
+                warnings.push(format!(
+                    "{} of the {centers} centers asked for: every further candidate was a \
+                     combination of those chosen, or the error was used up",
+                    f.centers.len()
+                ));
+            }
+            f
+        }
         Method::Gradient => crate::gradient::fit(&x, &y, centers, opts.seed, opts.iterations)?,
         Method::Poly3 => crate::poly3::fit(&x, &y)?,
     };
@@ -638,6 +664,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
         linear: rbf.linear.clone(),
         evidence,
         settings_evaluated,
+        select: (opts.method == Method::Mse).then_some(opts.select),
         basis: basis.map(|b| b.0),
         other_basis_log_evidence: basis.and_then(|b| b.1),
         train_rows: data.len(),

@@ -3,6 +3,7 @@ use anyhow::Context;
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
 use tcomp_train::bayes::Basis;
+use tcomp_train::mse::CenterSelection;
 use tcomp_train::{Dataset, FitOptions, FitSummary, Spec};
 
 /// Arguments of `tcomp fit`.
@@ -47,6 +48,13 @@ pub struct Args {
     /// No linear term (bayes).
     #[arg(long)]
     pub no_linear: bool,
+    /// Do not offer bayes the cubic in the first feature as a basis (it is chosen only when the
+    /// Gaussians do not beat it by ln 20 in log evidence).
+    #[arg(long)]
+    pub no_cubic: bool,
+    /// Center selection of mse: kmeans (default) or ols (orthogonal least squares forward selection).
+    #[arg(long)]
+    pub select: Option<String>,
     /// Steps longer than this (s) are gaps [default: 10× the median step].
     #[arg(long)]
     pub gap: Option<f64>,
@@ -96,6 +104,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         method: args.method.clone(),
         centers: args.centers,
         linear: args.no_linear.then_some(false),
+        cubic: args.no_cubic.then_some(false),
+        select: args.select.clone(),
         gap: args.gap,
         seed: args.seed,
         iterations: args.iterations,
@@ -144,7 +154,12 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
             .unwrap_or_default();
         println!("feature     {f}{ls}{lin}");
     }
-    println!("centers     {} (width σ = {:.3})", s.centers, s.width);
+    let by = match s.select {
+        Some(CenterSelection::Kmeans) => ", placed by k-means",
+        Some(CenterSelection::Ols) => ", chosen by orthogonal least squares",
+        None => "",
+    };
+    println!("centers     {} (width σ = {:.3}{by})", s.centers, s.width);
     match (s.basis, s.other_basis_log_evidence) {
         (Some(Basis::Cubic), Some(other)) => println!(
             "basis       cubic in the first feature (chosen by evidence; the best Gaussian model's log evidence is {other:.2})"
