@@ -391,14 +391,11 @@ pub fn closest(name: &str, names: &[String]) -> Option<String> {
 /// Row indices where a new contiguous segment starts (always including 0): a step longer than
 /// `max(gap_s, 10 × median step)` is a gap. Stateful features (`rate`, `lag`) are reset there.
 pub fn segments(time: &[f64], gap_s: Option<f64>) -> Vec<usize> {
-    let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
     let mut starts = vec![0];
-    if steps.is_empty() {
+    if time.len() < 2 {
         return starts;
     }
-    let mid = steps.len() / 2;
-    let median = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
-    let limit = gap_s.unwrap_or(0.0).max(10.0 * median);
+    let limit = gap_s.unwrap_or(0.0).max(10.0 * median_step(time));
     for (i, w) in time.windows(2).enumerate() {
         if w[1] - w[0] > limit {
             starts.push(i + 1);
@@ -409,10 +406,15 @@ pub fn segments(time: &[f64], gap_s: Option<f64>) -> Vec<usize> {
 
 /// The median time step of a time column (seconds), 1 when there is only one sample.
 pub fn median_step(time: &[f64]) -> f64 {
-    let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
-    if steps.is_empty() {
+    let mut diffs = time.windows(2).map(|w| w[1] - w[0]);
+    let Some(first) = diffs.next() else {
         return 1.0;
+    };
+    // A uniformly sampled record (the common case) needs no selection.
+    if diffs.all(|d| d == first) {
+        return first;
     }
+    let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
     let mid = steps.len() / 2;
     *steps.select_nth_unstable_by(mid, f64::total_cmp).1
 }
