@@ -22,12 +22,13 @@ use tcomp_core::{BlobError, Channel, MAX_INPUTS, Model};
 use tcomp_hal::scale::ChannelScale;
 use tcomp_hal::{PulseCounter, Thermometer};
 
-/// Centers per model in the firmware.
-pub const CENTERS: usize = 32;
+/// Centers per model in the firmware (the core's [`tcomp_core::FLIGHT_CENTERS`], which the host
+/// tools check blobs against).
+pub const CENTERS: usize = tcomp_core::FLIGHT_CENTERS;
 /// Features per model in the firmware.
-pub const FEATURES: usize = 4;
+pub const FEATURES: usize = tcomp_core::FLIGHT_FEATURES;
 /// Feature-program nodes per model in the firmware.
-pub const NODES: usize = 16;
+pub const NODES: usize = tcomp_core::FLIGHT_NODES;
 /// A model as the firmware holds it: numbers in RAM, strings borrowed from the image in flash.
 pub type FwModel<'a> = Model<'a, CENTERS, FEATURES, NODES>;
 /// One channel's streaming state.

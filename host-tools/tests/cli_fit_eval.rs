@@ -120,3 +120,122 @@ fn fit_eval_inspect() {
     assert!(err.contains("did you mean `gyro_dph`"), "{err}");
     assert!(!none.exists());
 }
+
+/// A model larger than the firmware holds: `fit` writes it with a warning naming what is too
+/// large, and `image` refuses to pack it (a board would reject it at boot); a model that fits packs.
+/// `--method mse --select ols` places its centers by orthogonal least squares and says so.
+#[test]
+fn image_refuses_a_model_the_firmware_cannot_hold() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("run.csv");
+    let mut s = String::from("time_s,a,b,c,d,e,gyro\n");
+    for i in 0..3000 {
+        let t = i as f64;
+        let a = 20.0 + 15.0 * (t / 500.0).sin();
+        let b = 20.0 + 10.0 * (t / 310.0).cos();
+        let c = 5.0 * (t / 170.0).sin();
+        let d = 3.0 * (t / 90.0).cos();
+        let e = 2.0 * (t / 1300.0).sin();
+        let noise = 0.01 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5);
+        s.push_str(&format!(
+            "{t},{a},{b},{c},{d},{e},{}\n",
+            0.02 * a + 0.01 * b * c + 0.005 * d * e + noise
+        ));
+    }
+    std::fs::write(&csv, s).unwrap();
+    let c = csv.to_str().unwrap();
+    let big = dir.path().join("big.tcm");
+    let small = dir.path().join("small.tcm");
+    let image = dir.path().join("models.bin");
+    let fit = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec![
+            "fit",
+            "--data",
+            c,
+            "--target",
+            "gyro",
+            "--reference-value",
+            "0",
+            "--average",
+            "10",
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        tcomp(&args)
+    };
+    let five = [
+        "--feature",
+        "a",
+        "--feature",
+        "b",
+        "--feature",
+        "c",
+        "--feature",
+        "d",
+        "--feature",
+        "e",
+    ];
+    let out = fit(&big, &five);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("does not fit the firmware: 5 features (the firmware holds 4)"),
+        "{err}"
+    );
+    let out = tcomp(&[
+        "image",
+        "--model",
+        &format!("0={}", big.display()),
+        "--out",
+        image.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("5 features (the firmware holds 4)"), "{err}");
+    assert!(!image.exists(), "nothing half-written");
+
+    let out = fit(
+        &small,
+        &[
+            "--feature",
+            "a",
+            "--feature",
+            "b * c",
+            "--method",
+            "mse",
+            "--select",
+            "ols",
+            "--centers",
+            "12",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("12 (width") && text.contains("chosen by orthogonal least squares"),
+        "{text}"
+    );
+    let out = tcomp(&[
+        "image",
+        "--model",
+        &format!("3={}", small.display()),
+        "--out",
+        image.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(image.exists());
+}

@@ -3,7 +3,7 @@
 //! with bit-identical outputs while the error falls.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use tcomp_core::{Channel, Model, Status};
+use tcomp_core::{Channel, FLIGHT_CENTERS, FLIGHT_FEATURES, FLIGHT_NODES, Model, Status};
 use tcomp_sim::presets;
 use tcomp_train::{Dataset, FitOptions, fit};
 
@@ -37,8 +37,8 @@ fn host_trained_blob_flies_bit_exact_in_firmware_sized_types() {
     let blob = fitted.model.to_bytes().unwrap();
 
     let host = Model::<'_, 64, 8, 48>::decode(&blob).unwrap();
-    let flight =
-        Model::<'_, 32, 4, 24>::decode(&blob).expect("a 32 x 4 blob fits the firmware types");
+    let flight = Model::<'_, FLIGHT_CENTERS, FLIGHT_FEATURES, FLIGHT_NODES>::decode(&blob)
+        .expect("a 32 x 4 blob fits the firmware types");
     let names = host.program.inputs.clone();
     let cols: Vec<&[f64]> = names.iter().map(|n| verify.column(n).unwrap()).collect();
     let time = verify.column("time_s").unwrap();
@@ -46,7 +46,7 @@ fn host_trained_blob_flies_bit_exact_in_firmware_sized_types() {
     let reference = verify.column("ref_dph").unwrap();
 
     let mut a = Channel::<48, 8>::new(1.0);
-    let mut b = Channel::<24, 4>::new(1.0);
+    let mut b = Channel::<FLIGHT_NODES, FLIGHT_FEATURES>::new(1.0);
     let (mut raw_err, mut res_err) = (Vec::new(), Vec::new());
     for i in 0..verify.len() {
         let inputs: Vec<f32> = cols.iter().map(|c| c[i] as f32).collect();

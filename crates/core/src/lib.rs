@@ -40,6 +40,12 @@ pub const HOST_CENTERS: usize = 64;
 pub const HOST_FEATURES: usize = 8;
 /// Host-side default capacity: operations per feature program.
 pub const HOST_NODES: usize = 48;
+/// The reference firmware's capacity (`firmware/src/app.rs` takes these): centers per model.
+pub const FLIGHT_CENTERS: usize = 32;
+/// The reference firmware's capacity: features per model.
+pub const FLIGHT_FEATURES: usize = 4;
+/// The reference firmware's capacity: operations per feature program.
+pub const FLIGHT_NODES: usize = 16;
 /// Named input columns a program may read.
 pub const MAX_INPUTS: usize = 8;
 /// Named signals (`NAME = expr`) a program may define.

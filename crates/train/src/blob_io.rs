@@ -132,3 +132,45 @@ pub fn decode<'a>(path: &Path, bytes: &'a [u8]) -> Result<Model<'a, C, F, N>, Tr
     Model::decode(bytes)
         .map_err(|e| TrainError::Blob(format!("{}: corrupt model blob: {e}", path.display())))
 }
+
+/// Checks that a blob loads into the reference firmware's model types
+/// ([`tcomp_core::FLIGHT_CENTERS`] × [`tcomp_core::FLIGHT_FEATURES`], [`tcomp_core::FLIGHT_NODES`]
+/// program nodes); the error names what is too large.
+pub fn check_flight(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
+    use tcomp_core::{FLIGHT_CENTERS, FLIGHT_FEATURES, FLIGHT_NODES};
+    let host = decode(path, bytes)?;
+    let (f, c, n) = (
+        usize::from(host.rbf.n_features),
+        host.rbf.centers.len(),
+        host.program.nodes.len(),
+    );
+    let mut over = Vec::new();
+    if f > FLIGHT_FEATURES {
+        over.push(format!(
+            "{f} features (the firmware holds {FLIGHT_FEATURES})"
+        ));
+    }
+    if c > FLIGHT_CENTERS {
+        over.push(format!("{c} centers (the firmware holds {FLIGHT_CENTERS})"));
+    }
+    if n > FLIGHT_NODES {
+        over.push(format!(
+            "{n} feature-program nodes (the firmware holds {FLIGHT_NODES})"
+        ));
+    }
+    if !over.is_empty() {
+        return Err(TrainError::Blob(format!(
+            "{}: the model does not fit the firmware: {}",
+            path.display(),
+            over.join(", ")
+        )));
+    }
+    Model::<'_, FLIGHT_CENTERS, FLIGHT_FEATURES, FLIGHT_NODES>::decode(bytes)
+        .map(|_| ())
+        .map_err(|e| {
+            TrainError::Blob(format!(
+                "{}: the model does not load into the firmware's types: {e}",
+                path.display()
+            ))
+        })
+}

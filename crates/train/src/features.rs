@@ -16,10 +16,7 @@ pub const F: usize = HOST_FEATURES;
 /// Program nodes on the host.
 pub const N: usize = HOST_NODES;
 
-/// Features per model on the firmware (`firmware/src/app.rs`'s `FEATURES`).
-pub const FLIGHT_FEATURES: usize = 4;
-/// Program nodes on the firmware (`firmware/src/app.rs`'s `NODES`).
-pub const FLIGHT_NODES: usize = 16;
+pub use tcomp_core::{FLIGHT_FEATURES, FLIGHT_NODES};
 
 /// Whether `spec` compiles into the firmware's program capacity. The trainer only adds features of
 /// its own (the cubic basis of `bayes`) when it does; what the user asks for is theirs to size.

@@ -659,7 +659,15 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
     let train = metrics::report(&run, REPORT_BIN_S);
     model.residual.std = train.residual_std as f32;
     model.residual.binned_std = train.binned.residual_std as f32;
-    let blob_bytes = model.to_bytes()?.len();
+    let final_bytes = model.to_bytes()?;
+    if let Err(e) =
+        crate::blob_io::check_flight(std::path::Path::new("the new model"), &final_bytes)
+    {
+        warnings.push(format!(
+            "{e}; it runs on the host, not on the reference board"
+        ));
+    }
+    let blob_bytes = final_bytes.len();
     let summary = FitSummary {
         method: opts.method,
         signals: model.spec.signals.clone(),

@@ -5,7 +5,8 @@
 //! Layout (little-endian; the firmware's reader and its documentation are `firmware/src/image.rs`):
 //! magic `TCMI`, version u16 = 1, count u16, CRC-32 (ISO-HDLC) of the table u32, then `count`
 //! entries of (channel id u16, 0u16, offset u32, length u32), then the blobs, each 4-byte aligned.
-//! Every blob is decoded before it is written: a blob that would not load is refused here.
+//! Every blob is decoded into the firmware's own model types before it is written: a blob that would
+//! not load on the board (corrupt, or too many features, centers or program nodes) is refused here.
 use anyhow::{Context, bail};
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
@@ -49,7 +50,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
         let path = PathBuf::from(file.trim());
         let bytes = tcomp_train::blob_io::read(&path)?;
-        tcomp_train::blob_io::decode(&path, &bytes)?;
+        tcomp_train::blob_io::check_flight(&path, &bytes)?;
         blobs.push((id, bytes));
     }
     let table_end = HEADER_LEN + ENTRY_LEN * blobs.len();
