@@ -151,6 +151,12 @@ pub struct Scored {
     pub train_residual_std_after: f64,
     /// Members scored.
     pub members: usize,
+    /// The family members next to the best one in its grid (a lag's τ/2 and 2τ, say), which the
+    /// confirmation refits to choose the parameter by the real fit's evidence.
+    #[serde(skip)]
+    pub neighbours: Vec<Candidate>,
+    /// Set when the confirmation's refits moved the parameter away from the scoring's choice.
+    pub parameter_scored: Option<f64>,
     /// Whether it clears the criterion (set by the verdict).
     pub passes: bool,
     /// Why it does not (set by the verdict).
@@ -605,6 +611,19 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             unconfirmed: None,
             train_residual_std_after: best.train_std,
             members: mine.len(),
+            neighbours: {
+                let fam = families.get(f).map_or(&[][..], |x| x.members.as_slice());
+                let at = fam.iter().position(|m| std::ptr::eq(m, best_c));
+                at.map(|i| {
+                    [i.checked_sub(1), Some(i + 1)]
+                        .into_iter()
+                        .flatten()
+                        .filter_map(|j| fam.get(j).cloned())
+                        .collect()
+                })
+                .unwrap_or_default()
+            },
+            parameter_scored: None,
             passes: false,
             fails: Vec::new(),
         });

@@ -145,10 +145,12 @@ fn hidden_lagged_element() {
         &[Poly, Rate, LaggedElement],
         Some(LaggedElement),
     );
-    // Not within the 1.2× target: measured 1.26× since the trainer’s Occam rules (1.13× before,
-    // with the diagnosis' τ = 20 min; 1.63× then with the true τ = 40 min). The verification run
-    // goes to −10 °C after training at 10–40 °C, and the evidence cannot see extrapolation.
-    check_found_within(&o, Kind::LaggedElement, 1.3);
+    // The scoring (base Gaussians held fixed) ranks τ = 20 min first; the confirmation's refits
+    // re-choose τ by their log evidence among 10, 20 and 40 min and find the true 40 min.
+    // Measured 1.05× the noise floor after (1.26× with τ = 20 min).
+    check_found(&o, Kind::LaggedElement);
+    let exprs = o.top.as_ref().map(|t| t.1.clone()).unwrap_or_default();
+    assert_eq!(exprs, vec!["lag(t_coil_c, 2400)".to_string()], "{}", o.text);
 }
 
 #[test]
