@@ -21,7 +21,9 @@
 //!   converged hyperparameters.
 //! * **Families** (a lag's τ, a threshold, a rate window) are marginalised over their grid:
 //!   `ln mean(exp Δ)`, so searching more values does not buy evidence; τ of the best member is
-//!   reported.
+//!   reported, and [`crate::confirm`] re-chooses it among that member and its grid neighbours by
+//!   the real refits' evidence (the fixed base Gaussians here absorb part of a slow effect and bias
+//!   τ short).
 
 use crate::candidates::{Candidate, EffectKind, Family};
 use crate::error::{DiscoverError, Result};
