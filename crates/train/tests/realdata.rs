@@ -133,6 +133,14 @@ fn mems_cycle_cubic_models_fit_the_firmware() {
     }
     println!("bayes(T) chose the cubic basis on {cubic} of 6 channels");
     assert!(cubic >= 1, "no tie was broken towards the cubic");
+    // `--no-cubic`: the Gaussians alone, and nothing compared with them.
+    let mut o = FitOptions::new("acc_z_m_s2", &["temp_imu_C"]);
+    o.until = Some(3130.0);
+    o.cubic = false;
+    let f = fit(&d, &o).unwrap();
+    assert_eq!(f.summary.basis, Some(tcomp_train::bayes::Basis::Gaussians));
+    assert_eq!(f.summary.other_basis_log_evidence, None);
+    assert_eq!(f.model.spec.features, vec!["temp_imu_C".to_string()]);
 }
 
 /// With the rate of temperature as a second feature (the thermal gradients inside the package
