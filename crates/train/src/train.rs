@@ -519,7 +519,10 @@ fn cubic_basis(
     let mut out = [FeatureRange { lo: 0.0, hi: 0.0 }; 2];
     let mut cols = Vec::with_capacity(2);
     for (k, range) in out.iter_mut().enumerate() {
-        let c: Vec<f64> = feats.iter().map(|r| f64::from(r[nf + k])).collect();
+        let c: Vec<f64> = feats
+            .iter()
+            .map(|r| r.get(nf + k).copied().map_or(f64::NAN, f64::from))
+            .collect();
         let (lo, hi) = c
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
