@@ -334,17 +334,8 @@ struct Prepared {
     /// Error (target − reference), one per bin.
     y: Vec<f64>,
     /// The cubic basis offered to `bayes`, when it is and fits the firmware.
-    cubic: Option<CubicBasis>,
+    cubic: Option<crate::poly3::CubicBasis>,
     warnings: Vec<String>,
-}
-
-/// The cubic in the first feature as `bayes` may choose it: the program with `Tclamped =
-/// clamp(first feature, trained range)` and the features `sq(Tclamped)`, `Tclamped * sq(Tclamped)`
-/// appended, their two ranges, and their binned values (computed by that program, like `x`).
-struct CubicBasis {
-    spec: FeatureSpec,
-    ranges: [FeatureRange; 2],
-    rows: Vec<Vec<f64>>,
 }
 
 /// The rows a method is fitted on: features computed by the core's program over `data` (restricted
@@ -474,7 +465,7 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
         .collect();
     let cubic =
         if opts.method == Method::Bayes && opts.linear && opts.cubic && opts.centers.is_none() {
-            cubic_basis(&spec, &data, time, &starts, &ranges, &b)?
+            crate::poly3::cubic_basis(&spec, &data, time, &starts, &ranges, &b)?
         } else {
             None
         };
@@ -489,63 +480,6 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
         cubic,
         warnings,
     })
-}
-
-/// The cubic basis for `spec`, or `None` when the program with it would not fit the firmware
-/// ([`features::fits_flight`]) or the first feature does not vary.
-fn cubic_basis(
-    spec: &FeatureSpec,
-    data: &Dataset,
-    time: &[f64],
-    starts: &[usize],
-    ranges: &[FeatureRange],
-    b: &[(usize, usize)],
-) -> Result<Option<CubicBasis>, TrainError> {
-    let (Some(expr), Some(r)) = (spec.features.first(), ranges.first()) else {
-        return Ok(None);
-    };
-    if r.hi.is_nan() || r.lo.is_nan() || r.hi <= r.lo {
-        return Ok(None);
-    }
-    let (sig, feats) = crate::poly3::program_lines(expr, f64::from(r.lo), f64::from(r.hi));
-    let mut augmented = spec.clone();
-    augmented.signals.push(sig);
-    augmented.features.extend(feats.into_iter().skip(1));
-    if !features::fits_flight(&augmented) {
-        return Ok(None);
-    }
-    let nf = spec.features.len();
-    let feats = features::compute(&augmented.program()?, data, time, starts)?;
-    let mut out = [FeatureRange { lo: 0.0, hi: 0.0 }; 2];
-    let mut cols = Vec::with_capacity(2);
-    for (k, range) in out.iter_mut().enumerate() {
-        let c: Vec<f64> = feats
-            .iter()
-            .map(|r| r.get(nf + k).copied().map_or(f64::NAN, f64::from))
-            .collect();
-        let (lo, hi) = c
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
-                (l.min(v), h.max(v))
-            });
-        *range = FeatureRange {
-            lo: lo as f32,
-            hi: hi as f32,
-        };
-        cols.push(bin_mean(&c, b));
-    }
-    let rows = (0..b.len())
-        .map(|i| {
-            cols.iter()
-                .map(|c| c.get(i).copied().unwrap_or(0.0))
-                .collect()
-        })
-        .collect();
-    Ok(Some(CubicBasis {
-        spec: augmented,
-        ranges: out,
-        rows,
-    }))
 }
 
 /// Trains a model on `data` (restricted to `opts.from..opts.until` when given).
