@@ -142,7 +142,9 @@ pub fn bins(time: &[f64], bin_s: f64) -> Vec<(usize, usize)> {
     let mut start = 0;
     let mut cur = 0i64;
     for (i, &t) in time.iter().enumerate() {
-        let b = ((t - t0) / bin_s).floor() as i64;
+        // t ≥ t0 (time is checked monotonic), so truncation is the floor, without a libm call.
+        let q = (t - t0) / bin_s;
+        let b = if q >= 0.0 { q as i64 } else { q.floor() as i64 };
         if b != cur {
             if i - start >= need {
                 out.push((start, i));
