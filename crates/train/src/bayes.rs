@@ -28,8 +28,10 @@
 //! `tcomp fit` does whenever the program with it still fits the firmware), the cubic in the first
 //! feature clamped to its trained range — the polynomial PX4 and ArduPilot fly — is one more
 //! candidate: `[1 | x | T² | T³]` with `T²`, `T³` in the linear term's prior group, no Gaussians.
-//! It ranks between the linear term alone and the fewest centers in the parsimony rule, so it is
-//! chosen when the Gaussians do not beat it by [`PARSIMONY`]. Why: on a single thermal cycle whose
+//! (Only `T²` and `T³` are clamped; `T` stays an ordinary feature, whose linear term the core lets
+//! extrapolate up to one range span, where poly3 holds all three at the edge.) It ranks between
+//! the linear term alone and the fewest centers in the parsimony rule, so it is chosen when the
+//! Gaussians do not beat it by the Occam margin ([`PARSIMONY`], grown by [`margin_inflation`]). Why: on a single thermal cycle whose
 //! residual is hysteresis that no function of T reaches (the real MEMS record), Gaussian models
 //! and the cubic tie in evidence, and which of them does better on the next cooling is luck
 //! (measured 0.96–1.07 of poly3 for the Gaussians); preferring the simpler basis on a tie makes
