@@ -352,8 +352,9 @@ pub fn fit(x: &[Vec<f64>], y: &[f64], opts: &BayesOptions) -> Option<BayesFit> {
 
 /// [`fit`], with the cubic in the first feature offered as a basis of its own: `cubic` holds, per
 /// row of `x`, `[T², T³]` of the first feature clamped to its trained range (as the core computes
-/// them). The cubic is chosen when its evidence is within [`PARSIMONY`] of the best Gaussian
-/// model's (it is the simpler of the two), or above it.
+/// them). The cubic is chosen when its evidence is within the Occam margin of the best Gaussian
+/// model's (it is the simpler of the two), or above it; the margin is [`PARSIMONY`] times
+/// [`margin_inflation`].
 pub fn fit_offering_cubic(
     x: &[Vec<f64>],
     y: &[f64],
