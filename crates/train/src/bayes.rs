@@ -172,8 +172,9 @@ pub const FIRST_WIDTHS: [f64; 4] = [0.35, 0.7, 1.4, 2.8];
 /// Parsimony: the fewest centers whose log evidence is within this of the best one's is chosen.
 /// ln 20 ≈ 3 is "strong" evidence on Kass and Raftery's scale; a smaller difference does not
 /// justify more centers, least of all when slow, correlated noise makes the evidence
-/// overconfident (on the simulated QMA run with its exact physics features this keeps 4 centers
-/// instead of 8 narrow ones that follow bias instability: 1.07× instead of 1.10× the noise floor).
+/// overconfident (on the simulated QMA run with its exact physics features this margin alone keeps
+/// 4 centers instead of 8 narrow ones that follow bias instability: 1.07× instead of 1.10× the
+/// noise floor; grown by [`margin_inflation`], it keeps none: 0.99×).
 pub const PARSIMONY: f64 = 3.0;
 /// The most [`margin_inflation`] multiplies [`PARSIMONY`] by (a margin of 9 nats).
 pub const MAX_MARGIN_INFLATION: f64 = 3.0;
