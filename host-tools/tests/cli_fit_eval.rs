@@ -10,6 +10,15 @@ fn tcomp(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// Fails the test with the command's stderr unless it succeeded.
+fn succeeded(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 #[test]
 fn fit_eval_inspect() {
     let dir = tempfile::tempdir().unwrap();
@@ -43,11 +52,7 @@ fn fit_eval_inspect() {
         m,
         "--quiet",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains("method      bayes") && text.contains("log evidence"),
@@ -55,11 +60,7 @@ fn fit_eval_inspect() {
     );
 
     let out = tcomp(&["eval", "--model", m, "--data", c, "--json", "--quiet"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     for k in [
         "raw_std",
@@ -178,11 +179,7 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
         "e",
     ];
     let out = fit(&big, &five);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("does not fit the firmware: 5 features (the firmware holds 4)"),
@@ -215,11 +212,7 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
             "12",
         ],
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains("12 (width") && text.contains("chosen by orthogonal least squares"),
@@ -232,10 +225,6 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
         "--out",
         image.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     assert!(image.exists());
 }

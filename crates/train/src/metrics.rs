@@ -94,24 +94,14 @@ pub fn run_model(
             .and_then(|len| buf.get(..len))
             .and_then(|b| Model::<'_, C, { crate::features::FLIGHT_FEATURES }, N>::decode(b).ok());
         if let Some(m) = narrow {
-            return run_in(&m, data, roles, temperature, gap_s);
+            return run_at_capacity(&m, data, roles, temperature, gap_s);
         }
     }
-    run_in(model, data, roles, temperature, gap_s)
+    run_at_capacity(model, data, roles, temperature, gap_s)
 }
 
-/// [`run_model`] at the model's own capacity (tests compare the two).
-pub fn run_wide(
-    model: &Model<'_, C, F, N>,
-    data: &Dataset,
-    roles: &Roles,
-    temperature: Option<&str>,
-    gap_s: Option<f64>,
-) -> Result<Run, TrainError> {
-    run_in(model, data, roles, temperature, gap_s)
-}
-
-fn run_in<const C2: usize, const F2: usize, const N2: usize>(
+/// [`run_model`] in the types `model` was decoded into, whatever their capacity.
+pub fn run_at_capacity<const C2: usize, const F2: usize, const N2: usize>(
     model: &Model<'_, C2, F2, N2>,
     data: &Dataset,
     roles: &Roles,

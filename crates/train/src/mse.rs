@@ -15,16 +15,26 @@ use std::str::FromStr;
 
 /// Width heuristic `σ = d_max/√(2M)`; 1 with fewer than two centers.
 pub fn width_heuristic(centers: &[Vec<f64>]) -> f64 {
+    heuristic_width(max_distance(centers), centers.len())
+}
+
+/// The largest distance between two of `points` (0 with fewer than two).
+fn max_distance(points: &[Vec<f64>]) -> f64 {
     let mut dmax: f64 = 0.0;
-    for (i, a) in centers.iter().enumerate() {
-        for b in centers.iter().skip(i + 1) {
+    for (i, a) in points.iter().enumerate() {
+        for b in points.iter().skip(i + 1) {
             dmax = dmax.max(dist2(a, b).sqrt());
         }
     }
-    if centers.len() < 2 || dmax <= 0.0 {
+    dmax
+}
+
+/// `d_max/√(2M)`, or 1 when there is no spread to scale.
+fn heuristic_width(dmax: f64, m: usize) -> f64 {
+    if m < 1 || dmax <= 0.0 {
         1.0
     } else {
-        dmax / (2.0 * centers.len() as f64).sqrt()
+        dmax / (2.0 * m as f64).sqrt()
     }
 }
 
@@ -75,14 +85,11 @@ pub fn fit_selecting(
             (centers, sigma)
         }
         CenterSelection::Ols => {
-            let stride = z.len().div_ceil(crate::ols::MAX_CANDIDATES).max(1);
-            let candidates: Vec<Vec<f64>> = z.iter().step_by(stride).cloned().collect();
-            let spread = width_heuristic(&candidates) * (2.0 * candidates.len() as f64).sqrt();
-            let sigma = if candidates.len() < 2 {
-                1.0
-            } else {
-                spread / (2.0 * m.max(1) as f64).sqrt()
-            };
+            let candidates: Vec<Vec<f64>> = crate::ols::candidate_rows(z.len())
+                .into_iter()
+                .filter_map(|i| z.get(i).cloned())
+                .collect();
+            let sigma = heuristic_width(max_distance(&candidates), m.max(1));
             let picked = crate::ols::select(&z, y, m, sigma);
             let centers = picked.iter().filter_map(|&i| z.get(i).cloned()).collect();
             (centers, sigma)

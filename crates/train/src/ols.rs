@@ -14,6 +14,11 @@
 /// Candidate centers at most (evenly spaced rows beyond that).
 pub const MAX_CANDIDATES: usize = 400;
 
+/// The rows of `n` that are candidate centers: all of them, or [`MAX_CANDIDATES`] evenly spaced.
+pub fn candidate_rows(n: usize) -> Vec<usize> {
+    (0..n).step_by(n.div_ceil(MAX_CANDIDATES).max(1)).collect()
+}
+
 /// Indices into `z` of up to `m` centers chosen by forward selection for targets `y`, with the
 /// Gaussian width `sigma` (in the units of `z`). Stops early when no candidate is left that is not
 /// (numerically) a combination of those chosen, or when the residual is exhausted.
@@ -22,8 +27,7 @@ pub fn select(z: &[Vec<f64>], y: &[f64], m: usize, sigma: f64) -> Vec<usize> {
     if n == 0 || m == 0 {
         return Vec::new();
     }
-    let stride = n.div_ceil(MAX_CANDIDATES).max(1);
-    let candidates: Vec<usize> = (0..n).step_by(stride).collect();
+    let candidates = candidate_rows(n);
     let half_inv_s2 = 0.5 / (sigma * sigma);
     // Column k: the Gaussian of candidate k over every row, made orthogonal to the bias.
     let mut cols: Vec<Vec<f64>> = candidates

@@ -486,8 +486,8 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
 pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
     let Prepared {
         data,
-        spec,
-        ranges,
+        mut spec,
+        mut ranges,
         reference_value,
         average_s,
         x,
@@ -495,7 +495,6 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
         cubic,
         mut warnings,
     } = prepare(data, opts)?;
-    let (mut spec, mut ranges) = (spec, ranges);
     let time = data.time(&opts.time)?;
     let centers = opts.centers.unwrap_or(DEFAULT_CENTERS);
     let need = match opts.method {

@@ -176,7 +176,7 @@ fn narrow_and_wide_runs_agree() {
     assert_eq!(m.rbf.centers.len(), 32);
     let roles = Roles::of_model(&m);
     let narrow = tcomp_train::metrics::run_model(&m, &p.verify, &roles, None, None).unwrap();
-    let wide = tcomp_train::metrics::run_wide(&m, &p.verify, &roles, None, None).unwrap();
+    let wide = tcomp_train::metrics::run_at_capacity(&m, &p.verify, &roles, None, None).unwrap();
     assert_eq!(narrow.residual.len(), p.verify.len());
     let differ = narrow
         .residual
