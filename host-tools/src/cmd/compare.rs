@@ -16,7 +16,7 @@ pub struct Args {
     #[arg(long)]
     pub data: PathBuf,
     /// Bin length (s) of the binned figures.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub bin: f64,
     /// Column for segment detection [default: model A's first input].
     #[arg(long)]

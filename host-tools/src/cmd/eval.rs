@@ -13,25 +13,25 @@ pub struct Args {
     #[arg(long)]
     pub data: PathBuf,
     /// Bin length (s) of the binned figures.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub bin: f64,
     /// Override the model's reference column.
     #[arg(long)]
     pub reference: Option<String>,
     /// Override the model's reference with a constant.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::reference_value)]
     pub reference_value: Option<f64>,
     /// Column for segment detection [default: the program's first input].
     #[arg(long)]
     pub temperature: Option<String>,
     /// Evaluate only rows with time ≥ this (s).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
     pub from: Option<f64>,
     /// Evaluate only rows with time < this (s).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
     pub until: Option<f64>,
     /// Steps longer than this (s) are gaps [default: 10× the median step].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub gap: Option<f64>,
     /// Print JSON.
     #[arg(long)]
@@ -47,6 +47,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         args.bin.is_finite() && args.bin > 0.0,
         "--bin must be a positive number of seconds"
     );
+    if let (Some(from), Some(until)) = (args.from, args.until) {
+        anyhow::ensure!(
+            from < until,
+            "--from {from} must be less than --until {until} (rows with from ≤ time < until are evaluated)"
+        );
+    }
     let bytes = tcomp_train::blob_io::read(&args.model)?;
     let model = tcomp_train::blob_io::decode(&args.model, &bytes)?;
     let mut roles = Roles::of_model(&model);
@@ -65,6 +71,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.from.unwrap_or(f64::NEG_INFINITY),
             args.until.unwrap_or(f64::INFINITY),
         )?;
+        anyhow::ensure!(
+            data.len() >= 2,
+            "--from/--until select {} row(s) of {}, and at least 2 are needed to measure anything",
+            data.len(),
+            args.data.display()
+        );
     }
     progress.set_message("evaluating");
     let report = tcomp_train::evaluate(

@@ -28,7 +28,7 @@ pub struct Args {
     #[arg(long)]
     pub reference: Option<String>,
     /// Constant reference; with no reference at all the training mean of the target is used.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::reference_value)]
     pub reference_value: Option<f64>,
     /// Feature expression, e.g. `rate(T)` (repeatable).
     #[arg(long = "feature")]
@@ -40,10 +40,10 @@ pub struct Args {
     #[arg(long)]
     pub method: Option<String>,
     /// Average into non-overlapping bins of this many seconds before fitting; 0 = off [default: 120, shortened on short runs to leave 60 bins].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::average_s)]
     pub average: Option<f64>,
     /// Number of centers (bayes: fixed instead of chosen by evidence; mse/gradient: default 16).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::centers)]
     pub centers: Option<usize>,
     /// No linear term (bayes).
     #[arg(long)]
@@ -56,13 +56,13 @@ pub struct Args {
     #[arg(long)]
     pub select: Option<String>,
     /// Steps longer than this (s) are gaps [default: 10× the median step].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub gap: Option<f64>,
     /// k-means seed.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::seed)]
     pub seed: Option<u64>,
     /// Gradient-descent iterations.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::iterations)]
     pub iterations: Option<usize>,
     /// Sensor kind: rlg, qma, ifog, mems-gyro, mems-accel, other.
     #[arg(long)]
@@ -74,10 +74,10 @@ pub struct Args {
     #[arg(long)]
     pub unit: Option<String>,
     /// Train only on rows with time ≥ this (s).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
     pub from: Option<f64>,
     /// Train only on rows with time < this (s).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
     pub until: Option<f64>,
     /// Print the summary as JSON.
     #[arg(long)]
@@ -89,6 +89,12 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    super::output::check_file_output("--out", &args.out)?;
+    let mut inputs = vec![("--data", args.data.as_path())];
+    if let Some(spec) = &args.spec {
+        inputs.push(("--spec", spec.as_path()));
+    }
+    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
     let file_spec = match &args.spec {
         Some(p) => Spec::load(p)?,
         None => Spec::default(),

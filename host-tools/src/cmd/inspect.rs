@@ -1,7 +1,12 @@
 //! `tcomp inspect MODEL`: print what a blob holds; a corrupt blob is named as such, with the reason.
+//!
+//! Every string taken from the blob goes through [`super::printable`], in the table and in `--json`:
+//! a blob is a file from elsewhere, and its strings must not drive the terminal.
 use clap::Args as ClapArgs;
 use serde_json::json;
 use std::path::PathBuf;
+
+use super::printable::text;
 
 /// Arguments of `tcomp inspect`.
 #[derive(ClapArgs)]
@@ -81,7 +86,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         },
     });
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        println!(
+            "{}",
+            super::printable::json(&serde_json::to_string_pretty(&value)?)
+        );
         return Ok(());
     }
     println!(
@@ -91,26 +99,29 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         bytes.len()
     );
     println!(
-        "sensor       {:?}  axis {:?}  unit {:?}",
-        m.meta.sensor, m.meta.axis, m.meta.unit
+        "sensor       {:?}  axis \"{}\"  unit \"{}\"",
+        m.meta.sensor,
+        text(m.meta.axis),
+        text(m.meta.unit)
     );
-    println!("method       {}", m.meta.method);
+    println!("method       {}", text(m.meta.method));
     println!(
         "columns      time {}  target {}  reference {}",
-        c.time,
-        c.target,
+        text(c.time),
+        text(c.target),
         match c.reference_value {
             Some(v) if c.reference.is_empty() => format!("constant {v}"),
-            _ => c.reference.to_string(),
+            _ => text(c.reference),
         }
     );
     println!(
         "trained on   {} ({} samples)",
-        m.meta.trained_on, m.meta.train_samples
+        text(m.meta.trained_on),
+        m.meta.train_samples
     );
-    println!("inputs       {}", m.program.inputs.join(", "));
+    println!("inputs       {}", text(&m.program.inputs.join(", ")));
     for s in &signals {
-        println!("signal       {s}");
+        println!("signal       {}", text(s));
     }
     println!(
         "{:<32} {:>12} {:>12} {:>12}",
@@ -120,7 +131,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let r = m.ranges.get(k);
         println!(
             "{:<32} {:>12.5} {:>12.5} {:>12.4e}",
-            e,
+            text(e),
             r.map_or(f32::NAN, |r| r.lo),
             r.map_or(f32::NAN, |r| r.hi),
             m.rbf.linear.0.get(k).copied().unwrap_or(0.0)

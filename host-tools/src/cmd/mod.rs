@@ -1,5 +1,6 @@
 //! One module per subcommand.
 
+mod check;
 pub mod compare;
 pub mod demo;
 pub mod diagnose;
@@ -7,6 +8,8 @@ pub mod eval;
 pub mod fit;
 pub mod image;
 pub mod inspect;
+mod output;
+mod printable;
 mod progress;
 pub mod report;
 pub mod simulate;

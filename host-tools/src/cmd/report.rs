@@ -27,6 +27,13 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    super::output::check_file_output("--out", &args.out)?;
+    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", args.data.as_path())];
+    inputs.extend(args.model.iter().map(|m| ("--model", m.as_path())));
+    if let Some(v) = &args.verify {
+        inputs.push(("--verify", v.as_path()));
+    }
+    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
     let first = args
         .model
         .first()
