@@ -71,11 +71,18 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.from.unwrap_or(f64::NEG_INFINITY),
             args.until.unwrap_or(f64::INFINITY),
         )?;
-        anyhow::ensure!(
-            data.len() >= 2,
-            "--from/--until select {} row(s) of {}, and at least 2 are needed to measure anything",
-            data.len(),
-            args.data.display()
+    }
+    // One row has no spread: every figure would be a meaningless zero.
+    if data.len() < 2 {
+        let which = if args.from.is_some() || args.until.is_some() {
+            "--from/--until select"
+        } else {
+            "the file has"
+        };
+        anyhow::bail!(
+            "{}: {which} {} row(s), and at least 2 are needed to measure anything",
+            args.data.display(),
+            data.len()
         );
     }
     progress.set_message("evaluating");

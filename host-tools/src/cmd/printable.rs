@@ -47,12 +47,13 @@ pub fn text(s: &str) -> String {
 }
 
 /// Serialised JSON with every unsafe character written as a `\uXXXX` escape (UTF-16 pairs above
-/// U+FFFF). Outside strings JSON text is ASCII, so this only touches string contents, and the
-/// parsed value is unchanged.
+/// U+FFFF). serde_json already escapes U+0000–U+001F inside strings, so a raw one is layout
+/// (newline, indent) and stays; outside strings JSON text is ASCII, so this only touches string
+/// contents, and the parsed value is unchanged.
 pub fn json(serialised: &str) -> String {
     let mut out = String::with_capacity(serialised.len());
     for c in serialised.chars() {
-        if is_unsafe(c) {
+        if c >= ' ' && is_unsafe(c) {
             let mut units = [0u16; 2];
             for u in c.encode_utf16(&mut units) {
                 let _ = write!(out, "\\u{u:04x}");
@@ -84,6 +85,13 @@ mod tests {
         let safe = json(&raw);
         assert!(!safe.chars().any(is_unsafe), "{safe}");
         let back: serde_json::Value = serde_json::from_str(&safe).unwrap();
+        assert_eq!(back, v);
+        let pretty = json(&serde_json::to_string_pretty(&v).unwrap());
+        assert!(
+            !pretty.chars().any(|c| c != '\n' && is_unsafe(c)),
+            "{pretty}"
+        );
+        let back: serde_json::Value = serde_json::from_str(&pretty).unwrap();
         assert_eq!(back, v);
     }
 }
