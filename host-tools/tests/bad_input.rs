@@ -811,7 +811,8 @@ fn raw_control(s: &str) -> Option<char> {
 }
 
 /// A blob whose strings hold escape sequences (in the axis, the unit and a column name from the
-/// CSV header): `inspect` prints them escaped, and `--json` too while keeping the same strings.
+/// CSV header): `inspect` prints them escaped, and `--json` too while keeping the same strings;
+/// `eval` and `diagnose`, which print some of them, escape them as well.
 #[test]
 fn inspect_escapes_the_strings_of_a_blob() {
     let dir = tempfile::tempdir().unwrap();
@@ -865,4 +866,30 @@ fn inspect_escapes_the_strings_of_a_blob() {
     assert_eq!(v["axis"], axis);
     assert_eq!(v["unit"], unit);
     assert_eq!(v["columns"]["target"], evil_col);
+
+    // eval prints the unit, diagnose the target, unit and features: escaped too
+    for args in [
+        &["eval", "--model", "m.tcm", "--data", "run.csv"][..],
+        &["diagnose", "--model", "m.tcm", "--data", "run.csv"],
+        &[
+            "diagnose", "--model", "m.tcm", "--data", "run.csv", "--json",
+        ],
+    ] {
+        let out = tcomp_in(dir.path(), &strings(args));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert_eq!(
+            raw_control(&text.replace('\n', "")),
+            None,
+            "{args:?}: {text:?}"
+        );
+        assert!(
+            text.contains("\\u{202e}") || text.contains("\\u202e"),
+            "{args:?}: {text}"
+        );
+    }
 }

@@ -69,9 +69,11 @@ pub fn analyse(args: &Args) -> anyhow::Result<(Analysis, Dataset)> {
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let (a, _) = analyse(args)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&a.diagnosis)?);
+        let json = serde_json::to_string_pretty(&a.diagnosis)?;
+        println!("{}", super::printable::json(&json));
     } else {
-        print!("{}", text(&a, args.top));
+        // The model's target, unit and features come from the blob: no raw control characters.
+        print!("{}", super::printable::lines(&text(&a, args.top)));
     }
     Ok(())
 }

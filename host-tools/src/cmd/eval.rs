@@ -98,7 +98,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_report(&report, model.meta.unit);
+        print_report(&report, &super::printable::text(model.meta.unit));
     }
     Ok(())
 }

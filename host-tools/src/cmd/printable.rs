@@ -2,10 +2,11 @@
 //!
 //! Why: a blob's strings (column names, axis, unit, expressions, the training file's name) come from
 //! whoever wrote the blob. Printed raw, an escape sequence in them can retitle the terminal, hide
-//! text or reorder it (bidirectional overrides), so `inspect` escapes control and invisible
-//! characters in its table, and in `--json` writes them as `\uXXXX` escapes, which JSON readers turn
-//! back into the same string (serde_json escapes only U+0000–U+001F by itself, not DEL, the C1
-//! controls such as the one-byte CSI U+009B, or the bidirectional overrides).
+//! text or reorder it (bidirectional overrides). So `inspect` (and `eval`, `diagnose`, which print a
+//! few of them) escapes control and invisible characters in its text, and in `--json` writes them
+//! as `\uXXXX` escapes, which JSON readers turn back into the same string (serde_json escapes only
+//! U+0000–U+001F by itself, not DEL, the C1 controls such as the one-byte CSI U+009B, or the
+//! bidirectional overrides).
 
 use std::fmt::Write as _;
 
@@ -46,6 +47,20 @@ pub fn text(s: &str) -> String {
     out
 }
 
+/// A whole printed report whose lines hold strings from a blob: unsafe characters escaped as in
+/// [`text`], newlines kept (the report's own layout), backslashes left alone.
+pub fn lines(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if c != '\n' && is_unsafe(c) {
+            let _ = write!(out, "\\u{{{:x}}}", u32::from(c));
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
 /// Serialised JSON with every unsafe character written as a `\uXXXX` escape (UTF-16 pairs above
 /// U+FFFF). serde_json already escapes U+0000–U+001F inside strings, so a raw one is layout
 /// (newline, indent) and stays; outside strings JSON text is ASCII, so this only touches string
@@ -76,6 +91,11 @@ mod tests {
         let t = text(s);
         assert_eq!(t, "a\\u{1b}]0;x\\u{7}b\\u{9b}c\\u{202e}d\\\\e °C µg");
         assert!(!t.chars().any(is_unsafe));
+    }
+
+    #[test]
+    fn lines_keep_the_layout() {
+        assert_eq!(lines("a\tb\n°C\u{1b}[0m\\\n"), "a\\u{9}b\n°C\\u{1b}[0m\\\n");
     }
 
     #[test]
