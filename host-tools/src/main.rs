@@ -43,10 +43,18 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match run(cli.command) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(err) => {
+    let result = run(cli.command);
+    let output = cmd::stdout::finish();
+    match (result, output) {
+        (Err(err), _) => {
             eprintln!("error: {}", message(&err));
+            ExitCode::FAILURE
+        }
+        (Ok(()), Ok(())) => ExitCode::SUCCESS,
+        // The reader stopped reading (`| head`): what it wanted, it got.
+        (Ok(()), Err(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        (Ok(()), Err(e)) => {
+            eprintln!("error: writing to standard output: {e}");
             ExitCode::FAILURE
         }
     }

@@ -893,3 +893,27 @@ fn inspect_escapes_the_strings_of_a_blob() {
         );
     }
 }
+
+/// A reader that stops reading (`tcomp diagnose … | head`) is not a crash: no panic, no backtrace,
+/// exit 0. The pipe's read end is closed before the command has loaded its data, so its first
+/// write meets a closed pipe.
+#[test]
+fn a_closed_pipe_on_stdout_is_not_a_crash() {
+    let dir = standard_dir();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+        .args(["diagnose", "--model", "m.tcm", "--data", "run.csv"])
+        .current_dir(dir.path())
+        .env("RUST_BACKTRACE", "1")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !err.contains("panicked") && !err.to_lowercase().contains("backtrace"),
+        "{err}"
+    );
+    assert_eq!(out.status.code(), Some(0), "{err}");
+}

@@ -35,12 +35,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         if p.contains(&staged) {
             held.push(p.replace(&staged, &shown));
         } else {
-            println!("{p}\n");
+            outln!("{p}\n");
         }
     })?;
     staging.commit()?;
     for p in held {
-        println!("{p}\n");
+        outln!("{p}\n");
     }
     Ok(())
 }

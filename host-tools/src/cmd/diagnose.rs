@@ -70,10 +70,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let (a, _) = analyse(args)?;
     if args.json {
         let json = serde_json::to_string_pretty(&a.diagnosis)?;
-        println!("{}", super::printable::json(&json));
+        outln!("{}", super::printable::json(&json));
     } else {
         // The model's target, unit and features come from the blob: no raw control characters.
-        print!("{}", super::printable::lines(&text(&a, args.top)));
+        out!("{}", super::printable::lines(&text(&a, args.top)));
     }
     Ok(())
 }

@@ -96,7 +96,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     )?;
     progress.finish_and_clear();
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print_report(&report, &super::printable::text(model.meta.unit));
     }
@@ -105,16 +105,16 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 
 fn print_report(r: &EvalReport, unit: &str) {
     let u = if unit.is_empty() { "" } else { unit };
-    println!("samples          {}", r.samples);
-    println!("raw std          {:.6e} {u}", r.raw_std);
-    println!("residual std     {:.6e} {u}", r.residual_std);
-    println!("improvement      {:.1} %", r.improvement_pct);
-    println!("raw rms          {:.6e} {u}", r.raw_rms);
-    println!("residual rms     {:.6e} {u}", r.residual_rms);
-    println!("max |residual|   {:.6e} {u}", r.max_abs_residual);
-    println!("MSD before       {:.6e}", r.msd_before);
-    println!("MSD after        {:.6e}", r.msd_after);
-    println!(
+    outln!("samples          {}", r.samples);
+    outln!("raw std          {:.6e} {u}", r.raw_std);
+    outln!("residual std     {:.6e} {u}", r.residual_std);
+    outln!("improvement      {:.1} %", r.improvement_pct);
+    outln!("raw rms          {:.6e} {u}", r.raw_rms);
+    outln!("residual rms     {:.6e} {u}", r.residual_rms);
+    outln!("max |residual|   {:.6e} {u}", r.max_abs_residual);
+    outln!("MSD before       {:.6e}", r.msd_before);
+    outln!("MSD after        {:.6e}", r.msd_after);
+    outln!(
         "{} s bins ({})  raw std {:.6e}  residual std {:.6e}  improvement {:.1} %",
         r.binned.seconds,
         r.binned.bins,
@@ -122,20 +122,32 @@ fn print_report(r: &EvalReport, unit: &str) {
         r.binned.residual_std,
         r.binned.improvement_pct
     );
-    println!(
+    outln!(
         "out of range     {:.1} % of samples; input faults {}; gaps {}",
-        r.out_of_range_pct, r.input_faults, r.gaps
+        r.out_of_range_pct,
+        r.input_faults,
+        r.gaps
     );
     if !r.segments.is_empty() {
-        println!();
-        println!(
+        outln!();
+        outln!(
             "{:<8} {:>10} {:>10} {:>10} {:>14} {:>14}",
-            "segment", "start s", "end s", "°/min", "raw std", "residual std"
+            "segment",
+            "start s",
+            "end s",
+            "°/min",
+            "raw std",
+            "residual std"
         );
         for s in &r.segments {
-            println!(
+            outln!(
                 "{:<8} {:>10.0} {:>10.0} {:>10.3} {:>14.6e} {:>14.6e}",
-                s.kind, s.start_s, s.end_s, s.rate_per_min, s.raw_std, s.residual_std
+                s.kind,
+                s.start_s,
+                s.end_s,
+                s.rate_per_min,
+                s.raw_std,
+                s.residual_std
             );
         }
     }

@@ -132,7 +132,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     progress.finish_and_clear();
     let s = &fitted.summary;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(s)?);
+        outln!("{}", serde_json::to_string_pretty(s)?);
     } else {
         for w in &s.warnings {
             eprintln!("warning: {w}");
@@ -143,9 +143,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 }
 
 fn print_summary(s: &FitSummary, out: &std::path::Path) {
-    println!("method      {}", s.method);
+    outln!("method      {}", s.method);
     for sig in &s.signals {
-        println!("signal      {sig}");
+        outln!("signal      {sig}");
     }
     for (i, f) in s.features.iter().enumerate() {
         let ls = s
@@ -158,25 +158,25 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
             .get(i)
             .map(|l| format!("  linear {l:+.4e}"))
             .unwrap_or_default();
-        println!("feature     {f}{ls}{lin}");
+        outln!("feature     {f}{ls}{lin}");
     }
     let by = match s.select {
         Some(CenterSelection::Kmeans) => ", placed by k-means",
         Some(CenterSelection::Ols) => ", chosen by orthogonal least squares",
         None => "",
     };
-    println!("centers     {} (width σ = {:.3}{by})", s.centers, s.width);
+    outln!("centers     {} (width σ = {:.3}{by})", s.centers, s.width);
     match (s.basis, s.other_basis_log_evidence) {
-        (Some(Basis::Cubic), Some(other)) => println!(
+        (Some(Basis::Cubic), Some(other)) => outln!(
             "basis       cubic in the first feature (chosen by evidence; the best Gaussian model's log evidence is {other:.2})"
         ),
-        (Some(Basis::Gaussians), Some(other)) => println!(
+        (Some(Basis::Gaussians), Some(other)) => outln!(
             "basis       Gaussians (chosen by evidence; the cubic in the first feature scored {other:.2})"
         ),
         _ => {}
     }
     if let Some(e) = &s.evidence {
-        println!(
+        outln!(
             "evidence    α = {:.4e}  α_linear = {:.4e}  β = {:.4e}  γ = {:.2}  log evidence = {:.2}  ({} settings compared, {} iterations)",
             e.alpha,
             e.alpha_linear,
@@ -188,14 +188,16 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
         );
     }
     if let Some(r) = s.reference_value {
-        println!("reference   constant {r}");
+        outln!("reference   constant {r}");
     }
-    println!(
+    outln!(
         "trained on  {} rows, {} samples after averaging ({} s)",
-        s.train_rows, s.train_bins, s.average_s
+        s.train_rows,
+        s.train_bins,
+        s.average_s
     );
     let t = &s.train;
-    println!(
+    outln!(
         "training    raw std {:.5e}  residual std {:.5e}  improvement {:.1} %   ({} s bins: {:.5e} → {:.5e})",
         t.raw_std,
         t.residual_std,
@@ -204,5 +206,5 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
         t.binned.raw_std,
         t.binned.residual_std
     );
-    println!("wrote       {} ({} bytes)", out.display(), s.blob_bytes);
+    outln!("wrote       {} ({} bytes)", out.display(), s.blob_bytes);
 }

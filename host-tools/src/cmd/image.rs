@@ -91,7 +91,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
     super::output::check_file_output("--out", &args.out)?;
     tcomp_train::blob_io::write_atomic(&args.out, &image)?;
-    println!(
+    outln!(
         "wrote {} ({} bytes, {} models): flash it at 0x003F0000",
         args.out.display(),
         image.len(),

@@ -86,26 +86,26 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         },
     });
     if args.json {
-        println!(
+        outln!(
             "{}",
             super::printable::json(&serde_json::to_string_pretty(&value)?)
         );
         return Ok(());
     }
-    println!(
+    outln!(
         "{}: valid tcomp model blob, format version {}, {} bytes",
         args.model.display(),
         m.version,
         bytes.len()
     );
-    println!(
+    outln!(
         "sensor       {:?}  axis \"{}\"  unit \"{}\"",
         m.meta.sensor,
         text(m.meta.axis),
         text(m.meta.unit)
     );
-    println!("method       {}", text(m.meta.method));
-    println!(
+    outln!("method       {}", text(m.meta.method));
+    outln!(
         "columns      time {}  target {}  reference {}",
         text(c.time),
         text(c.target),
@@ -114,22 +114,25 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             _ => text(c.reference),
         }
     );
-    println!(
+    outln!(
         "trained on   {} ({} samples)",
         text(m.meta.trained_on),
         m.meta.train_samples
     );
-    println!("inputs       {}", text(&m.program.inputs.join(", ")));
+    outln!("inputs       {}", text(&m.program.inputs.join(", ")));
     for s in &signals {
-        println!("signal       {}", text(s));
+        outln!("signal       {}", text(s));
     }
-    println!(
+    outln!(
         "{:<32} {:>12} {:>12} {:>12}",
-        "feature", "lo", "hi", "linear"
+        "feature",
+        "lo",
+        "hi",
+        "linear"
     );
     for (k, e) in m.program.feature_exprs.iter().enumerate() {
         let r = m.ranges.get(k);
-        println!(
+        outln!(
             "{:<32} {:>12.5} {:>12.5} {:>12.4e}",
             text(e),
             r.map_or(f32::NAN, |r| r.lo),
@@ -137,20 +140,22 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             m.rbf.linear.0.get(k).copied().unwrap_or(0.0)
         );
     }
-    println!("bias         {:.6e}", m.rbf.bias);
-    println!("centers      {}", m.rbf.centers.len());
+    outln!("bias         {:.6e}", m.rbf.bias);
+    outln!("centers      {}", m.rbf.centers.len());
     for (j, c) in m.rbf.centers.iter().enumerate() {
         let (pos, _, w) = c.to_natural();
-        println!(
+        outln!(
             "  {j:>3}  σ {:.3}  w {:+.4e}  at {:?}",
             c.sigma(),
             w,
             pos.0.get(..nf).unwrap_or(&[])
         );
     }
-    println!(
+    outln!(
         "residual     std {:.4e}  binned std {:.4e} ({} s bins)",
-        m.residual.std, m.residual.binned_std, m.residual.bin_s
+        m.residual.std,
+        m.residual.binned_std,
+        m.residual.bin_s
     );
     Ok(())
 }

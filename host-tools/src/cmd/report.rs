@@ -77,9 +77,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         noise_floor: None,
     })?;
     tcomp_train::blob_io::write_atomic(&args.out, html.as_bytes())?;
-    println!("wrote {}", args.out.display());
+    outln!("wrote {}", args.out.display());
     if let Some(a) = &analysis {
-        println!("{}", a.diagnosis.verdict_text);
+        outln!("{}", a.diagnosis.verdict_text);
     }
     Ok(())
 }
