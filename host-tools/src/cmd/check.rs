@@ -10,8 +10,9 @@
 //! flag. The trainer checks the same options again for library callers and spec files.
 
 /// Shortest bin, averaging interval or gap threshold: 1 ms. The fastest loop the firmware runs is
-/// 200 Hz (5 ms), so a shorter interval holds at most one sample; the bin index is `(t − t0) / bin`
-/// in an `i64`, which a 1e-300 s bin overflows on the first step.
+/// 200 Hz (5 ms), so a shorter interval holds at most one sample; and the trainer's bin index is
+/// `(t − t0) / bin` cast to an `i64`, which a 1e-300 s bin saturates from the first step on, putting
+/// every later sample into one bin.
 pub const MIN_INTERVAL_S: f64 = 1e-3;
 
 /// Longest bin, averaging interval or gap threshold: 1e7 s (16 weeks). No chamber run is that long,
@@ -27,18 +28,20 @@ pub const MAX_TIME_S: f64 = 1e10;
 /// as an `f32`, whose 24-bit mantissa no longer resolves the residual of a value much larger.
 pub const MAX_REFERENCE: f64 = 1e9;
 
-/// Shortest and longest output step of `demo` (s). The demo simulates a 7.8-hour profile at one row
-/// per step: below 0.1 s that is more than 280 000 rows and the demo stops being quick; above 10 s
-/// the fastest ramp (2 °C/min) moves more than 0.3 °C between rows and rate features get coarse.
+/// Shortest and longest output step of `demo` (s). The demo's training profile lasts about 6.8
+/// hours, one row per step: below 0.1 s that is more than 240 000 rows and the demo stops being a
+/// quick demonstration; above 10 s the fastest ramp (2 °C/min) moves more than 0.3 °C between rows
+/// and the rate features get coarse.
 pub const DEMO_STEP_S: (f64, f64) = (0.1, 10.0);
 
-/// Largest `--min-evidence` (Δ ln evidence): 1e6. Real candidates differ by at most a few thousand,
-/// so a larger threshold can pass nothing and is a typo. Below 0 a candidate the evidence prefers to
-/// leave out would pass, so 0 is the smallest.
+/// Largest `--min-evidence` (Δ ln evidence): 1e6, a bound against typos only (a million nats is
+/// odds of e^1000000 to one). Below 0 a candidate the evidence prefers to leave out would pass, so
+/// 0 is the smallest.
 pub const MAX_MIN_EVIDENCE: f64 = 1e6;
 
-/// Most candidates `diagnose --top` prints: 10 000, far more than the candidate list ever holds;
-/// at least one, since a diagnosis printing no candidate hides its own evidence.
+/// Most candidates `diagnose --top` prints: 10 000, a bound against typos only (larger values print
+/// the whole list anyway); at least one, since a diagnosis printing no candidate hides its own
+/// evidence.
 pub const MAX_TOP: usize = 10_000;
 
 /// Most gradient-descent iterations: 10 million, hours of fitting; at least one, since zero
