@@ -4,7 +4,9 @@
 //!
 //! A user error is not a crash: `main` prints the error and its causes on one line (`error: …`) on
 //! stderr and exits with 1, whatever `RUST_BACKTRACE` says; bad usage exits with clap's 2. A panic
-//! keeps the default hook, since it is a bug, and no user input reaches one.
+//! keeps the default hook, since it is a bug, and no user input reaches one. Standard output closed
+//! by its reader (`tcomp … | head`) ends the run quietly with 0; any other failure to write it is an
+//! error.
 
 mod cmd;
 
