@@ -1,10 +1,17 @@
 //! `tcomp`: the command-line tool around the compensation core.
 //!
 //! Each subcommand lives in its own module under `cmd/`; `main` only parses arguments and dispatches.
+//!
+//! A user error is not a crash: `main` prints the error and its causes on one line (`error: …`) on
+//! stderr and exits with 1, whatever `RUST_BACKTRACE` says; bad usage exits with clap's 2. A panic
+//! keeps the default hook, since it is a bug, and no user input reaches one. Standard output closed
+//! by its reader (`tcomp … | head`) ends the run quietly with 0; any other failure to write it is an
+//! error.
 
 mod cmd;
 
 use clap::{Parser, Subcommand};
+use std::process::ExitCode;
 
 /// Temperature compensation of inertial sensors (RLG, QMA, IFOG, MEMS).
 #[derive(Parser)]
@@ -36,9 +43,27 @@ enum Command {
     Demo(cmd::demo::Args),
 }
 
-fn main() -> anyhow::Result<()> {
+fn main() -> ExitCode {
     let cli = Cli::parse();
-    match cli.command {
+    let result = run(cli.command);
+    let output = cmd::stdout::finish();
+    match (result, output) {
+        (Err(err), _) => {
+            eprintln!("error: {}", message(&err));
+            ExitCode::FAILURE
+        }
+        (Ok(()), Ok(())) => ExitCode::SUCCESS,
+        // The reader stopped reading (`| head`): what it wanted, it got.
+        (Ok(()), Err(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        (Ok(()), Err(e)) => {
+            eprintln!("error: writing to standard output: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(command: Command) -> anyhow::Result<()> {
+    match command {
         Command::Inspect(args) => cmd::inspect::run(&args),
         Command::Fit(args) => cmd::fit::run(&args),
         Command::Eval(args) => cmd::eval::run(&args),
@@ -49,4 +74,20 @@ fn main() -> anyhow::Result<()> {
         Command::Report(args) => cmd::report::run(&args),
         Command::Demo(args) => cmd::demo::run(&args),
     }
+}
+
+/// The error and its causes on one line, like `{err:#}`, but without a cause whose text the message
+/// already holds (the trainer's I/O errors print their source and also return it as the cause).
+fn message(err: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in err.chain() {
+        let c = cause.to_string();
+        if text.is_empty() {
+            text = c;
+        } else if !text.contains(&c) {
+            text.push_str(": ");
+            text.push_str(&c);
+        }
+    }
+    text
 }

@@ -16,7 +16,7 @@ pub struct Args {
     #[arg(long)]
     pub data: PathBuf,
     /// Bin length (s) of the binned figures.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub bin: f64,
     /// Column for segment detection [default: model A's first input].
     #[arg(long)]
@@ -101,38 +101,46 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         segments,
     };
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&c)?);
+        outln!("{}", serde_json::to_string_pretty(&c)?);
         return Ok(());
     }
-    println!(
+    outln!(
         "A = {}\nB = {}",
         args.model_a.display(),
         args.model_b.display()
     );
-    println!("{:<26} {:>12} {:>12} {:>9}", "", "A", "B", "change");
-    println!(
+    outln!("{:<26} {:>12} {:>12} {:>9}", "", "A", "B", "change");
+    outln!(
         "{:<26} {:>12.4e} {:>12.4e} {:>+8.1}%",
         "residual std",
         c.a.residual_std,
         c.b.residual_std,
         100.0 * (c.b.residual_std / c.a.residual_std.max(1e-300) - 1.0)
     );
-    println!(
+    outln!(
         "{:<26} {:>12.4e} {:>12.4e} {:>+8.1}%",
         format!("{} s bins residual std", args.bin),
         c.a.binned.residual_std,
         c.b.binned.residual_std,
         c.binned_change_pct
     );
-    println!();
-    println!(
+    outln!();
+    outln!(
         "{:<26} {:>12} {:>12} {:>12} {:>9}",
-        "segment", "raw std", "A resid", "B resid", "change"
+        "segment",
+        "raw std",
+        "A resid",
+        "B resid",
+        "change"
     );
     for s in &c.segments {
-        println!(
+        outln!(
             "{:<26} {:>12.4e} {:>12.4e} {:>12.4e} {:>+8.1}%",
-            s.label, s.raw_std, s.a_residual_std, s.b_residual_std, s.change_pct
+            s.label,
+            s.raw_std,
+            s.a_residual_std,
+            s.b_residual_std,
+            s.change_pct
         );
     }
     Ok(())

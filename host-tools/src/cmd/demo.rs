@@ -10,24 +10,37 @@ pub struct Args {
     #[arg(long, default_value = "tcomp-demo")]
     pub out: PathBuf,
     /// Simulation seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = super::check::seed)]
     pub seed: u64,
     /// Output step of the simulated runs (s); larger is quicker and coarser.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = super::check::demo_step_s)]
     pub step: f64,
 }
 
-/// Runs the command.
+/// Runs the command: the demo writes into a staging directory inside `--out`, and its files are
+/// moved into `--out` only when the whole loop succeeded, so a failed run leaves the files of an
+/// earlier run as they were. The demo reads no input, so no output can overwrite one.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        args.step.is_finite() && args.step > 0.0 && args.step <= 10.0,
-        "--step must be in (0, 10] seconds"
-    );
+    let staging = super::output::Staging::new("--out", &args.out)?;
+    let staged = staging.path().display().to_string();
+    let shown = args.out.display().to_string();
     let opts = DemoOptions {
-        out: args.out.clone(),
+        out: staging.path().to_path_buf(),
         seed: args.seed,
         step_s: args.step,
     };
-    run_demo(&opts, |p| println!("{p}\n"))?;
+    // Paragraphs naming the staging directory wait until the files are where they say.
+    let mut held = Vec::new();
+    run_demo(&opts, |p| {
+        if p.contains(&staged) {
+            held.push(p.replace(&staged, &shown));
+        } else {
+            outln!("{p}\n");
+        }
+    })?;
+    staging.commit()?;
+    for p in held {
+        outln!("{p}\n");
+    }
     Ok(())
 }

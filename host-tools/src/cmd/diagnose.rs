@@ -18,22 +18,22 @@ pub struct Args {
     #[arg(long)]
     pub verify: Option<PathBuf>,
     /// Override the model's reference with a constant.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::reference_value)]
     pub reference_value: Option<f64>,
     /// Column for segment detection [default: the program's first input].
     #[arg(long)]
     pub temperature: Option<String>,
     /// Averaging bin before scoring (s).
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub bin: f64,
     /// Minimum Δ log evidence of the verdict.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = super::check::min_evidence)]
     pub min_evidence: f64,
     /// Minimum held-out improvement (%) of the verdict.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = super::check::percent)]
     pub min_improvement: f64,
     /// Candidates printed.
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, allow_negative_numbers = true, value_parser = super::check::top)]
     pub top: usize,
     /// Print JSON.
     #[arg(long)]
@@ -69,9 +69,11 @@ pub fn analyse(args: &Args) -> anyhow::Result<(Analysis, Dataset)> {
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let (a, _) = analyse(args)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&a.diagnosis)?);
+        let json = serde_json::to_string_pretty(&a.diagnosis)?;
+        outln!("{}", super::printable::json(&json));
     } else {
-        print!("{}", text(&a, args.top));
+        // The model's target, unit and features come from the blob: no raw control characters.
+        out!("{}", super::printable::lines(&text(&a, args.top)));
     }
     Ok(())
 }

@@ -13,25 +13,25 @@ pub struct Args {
     #[arg(long)]
     pub data: PathBuf,
     /// Bin length (s) of the binned figures.
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub bin: f64,
     /// Override the model's reference column.
     #[arg(long)]
     pub reference: Option<String>,
     /// Override the model's reference with a constant.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::reference_value)]
     pub reference_value: Option<f64>,
     /// Column for segment detection [default: the program's first input].
     #[arg(long)]
     pub temperature: Option<String>,
     /// Evaluate only rows with time ≥ this (s).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
     pub from: Option<f64>,
     /// Evaluate only rows with time < this (s).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
     pub until: Option<f64>,
     /// Steps longer than this (s) are gaps [default: 10× the median step].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub gap: Option<f64>,
     /// Print JSON.
     #[arg(long)]
@@ -47,6 +47,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         args.bin.is_finite() && args.bin > 0.0,
         "--bin must be a positive number of seconds"
     );
+    if let (Some(from), Some(until)) = (args.from, args.until) {
+        anyhow::ensure!(
+            from < until,
+            "--from {from} must be less than --until {until} (rows with from ≤ time < until are evaluated)"
+        );
+    }
     let bytes = tcomp_train::blob_io::read(&args.model)?;
     let model = tcomp_train::blob_io::decode(&args.model, &bytes)?;
     let mut roles = Roles::of_model(&model);
@@ -66,6 +72,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.until.unwrap_or(f64::INFINITY),
         )?;
     }
+    // One row has no spread: every figure would be a meaningless zero.
+    if data.len() < 2 {
+        let which = if args.from.is_some() || args.until.is_some() {
+            "--from/--until select"
+        } else {
+            "the file has"
+        };
+        anyhow::bail!(
+            "{}: {which} {} row(s), and at least 2 are needed to measure anything",
+            args.data.display(),
+            data.len()
+        );
+    }
     progress.set_message("evaluating");
     let report = tcomp_train::evaluate(
         &model,
@@ -77,25 +96,25 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     )?;
     progress.finish_and_clear();
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_report(&report, model.meta.unit);
+        print_report(&report, &super::printable::text(model.meta.unit));
     }
     Ok(())
 }
 
 fn print_report(r: &EvalReport, unit: &str) {
     let u = if unit.is_empty() { "" } else { unit };
-    println!("samples          {}", r.samples);
-    println!("raw std          {:.6e} {u}", r.raw_std);
-    println!("residual std     {:.6e} {u}", r.residual_std);
-    println!("improvement      {:.1} %", r.improvement_pct);
-    println!("raw rms          {:.6e} {u}", r.raw_rms);
-    println!("residual rms     {:.6e} {u}", r.residual_rms);
-    println!("max |residual|   {:.6e} {u}", r.max_abs_residual);
-    println!("MSD before       {:.6e}", r.msd_before);
-    println!("MSD after        {:.6e}", r.msd_after);
-    println!(
+    outln!("samples          {}", r.samples);
+    outln!("raw std          {:.6e} {u}", r.raw_std);
+    outln!("residual std     {:.6e} {u}", r.residual_std);
+    outln!("improvement      {:.1} %", r.improvement_pct);
+    outln!("raw rms          {:.6e} {u}", r.raw_rms);
+    outln!("residual rms     {:.6e} {u}", r.residual_rms);
+    outln!("max |residual|   {:.6e} {u}", r.max_abs_residual);
+    outln!("MSD before       {:.6e}", r.msd_before);
+    outln!("MSD after        {:.6e}", r.msd_after);
+    outln!(
         "{} s bins ({})  raw std {:.6e}  residual std {:.6e}  improvement {:.1} %",
         r.binned.seconds,
         r.binned.bins,
@@ -103,20 +122,32 @@ fn print_report(r: &EvalReport, unit: &str) {
         r.binned.residual_std,
         r.binned.improvement_pct
     );
-    println!(
+    outln!(
         "out of range     {:.1} % of samples; input faults {}; gaps {}",
-        r.out_of_range_pct, r.input_faults, r.gaps
+        r.out_of_range_pct,
+        r.input_faults,
+        r.gaps
     );
     if !r.segments.is_empty() {
-        println!();
-        println!(
+        outln!();
+        outln!(
             "{:<8} {:>10} {:>10} {:>10} {:>14} {:>14}",
-            "segment", "start s", "end s", "°/min", "raw std", "residual std"
+            "segment",
+            "start s",
+            "end s",
+            "°/min",
+            "raw std",
+            "residual std"
         );
         for s in &r.segments {
-            println!(
+            outln!(
                 "{:<8} {:>10.0} {:>10.0} {:>10.3} {:>14.6e} {:>14.6e}",
-                s.kind, s.start_s, s.end_s, s.rate_per_min, s.raw_std, s.residual_std
+                s.kind,
+                s.start_s,
+                s.end_s,
+                s.rate_per_min,
+                s.raw_std,
+                s.residual_std
             );
         }
     }

@@ -28,7 +28,7 @@ pub struct Args {
     #[arg(long)]
     pub reference: Option<String>,
     /// Constant reference; with no reference at all the training mean of the target is used.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::reference_value)]
     pub reference_value: Option<f64>,
     /// Feature expression, e.g. `rate(T)` (repeatable).
     #[arg(long = "feature")]
@@ -40,10 +40,10 @@ pub struct Args {
     #[arg(long)]
     pub method: Option<String>,
     /// Average into non-overlapping bins of this many seconds before fitting; 0 = off [default: 120, shortened on short runs to leave 60 bins].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::average_s)]
     pub average: Option<f64>,
     /// Number of centers (bayes: fixed instead of chosen by evidence; mse/gradient: default 16).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::centers)]
     pub centers: Option<usize>,
     /// No linear term (bayes).
     #[arg(long)]
@@ -56,13 +56,13 @@ pub struct Args {
     #[arg(long)]
     pub select: Option<String>,
     /// Steps longer than this (s) are gaps [default: 10× the median step].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub gap: Option<f64>,
     /// k-means seed.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::seed)]
     pub seed: Option<u64>,
     /// Gradient-descent iterations.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::iterations)]
     pub iterations: Option<usize>,
     /// Sensor kind: rlg, qma, ifog, mems-gyro, mems-accel, other.
     #[arg(long)]
@@ -74,10 +74,10 @@ pub struct Args {
     #[arg(long)]
     pub unit: Option<String>,
     /// Train only on rows with time ≥ this (s).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
     pub from: Option<f64>,
     /// Train only on rows with time < this (s).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
     pub until: Option<f64>,
     /// Print the summary as JSON.
     #[arg(long)]
@@ -89,6 +89,12 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    super::output::check_file_output("--out", &args.out)?;
+    let mut inputs = vec![("--data", args.data.as_path())];
+    if let Some(spec) = &args.spec {
+        inputs.push(("--spec", spec.as_path()));
+    }
+    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
     let file_spec = match &args.spec {
         Some(p) => Spec::load(p)?,
         None => Spec::default(),
@@ -125,7 +131,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     progress.clear();
     let s = &fitted.summary;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(s)?);
+        outln!("{}", serde_json::to_string_pretty(s)?);
     } else {
         for w in &s.warnings {
             eprintln!("warning: {w}");
@@ -136,9 +142,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 }
 
 fn print_summary(s: &FitSummary, out: &std::path::Path) {
-    println!("method      {}", s.method);
+    outln!("method      {}", s.method);
     for sig in &s.signals {
-        println!("signal      {sig}");
+        outln!("signal      {sig}");
     }
     for (i, f) in s.features.iter().enumerate() {
         let ls = s
@@ -151,25 +157,25 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
             .get(i)
             .map(|l| format!("  linear {l:+.4e}"))
             .unwrap_or_default();
-        println!("feature     {f}{ls}{lin}");
+        outln!("feature     {f}{ls}{lin}");
     }
     let by = match s.select {
         Some(CenterSelection::Kmeans) => ", placed by k-means",
         Some(CenterSelection::Ols) => ", chosen by orthogonal least squares",
         None => "",
     };
-    println!("centers     {} (width σ = {:.3}{by})", s.centers, s.width);
+    outln!("centers     {} (width σ = {:.3}{by})", s.centers, s.width);
     match (s.basis, s.other_basis_log_evidence) {
-        (Some(Basis::Cubic), Some(other)) => println!(
+        (Some(Basis::Cubic), Some(other)) => outln!(
             "basis       cubic in the first feature (chosen by evidence; the best Gaussian model's log evidence is {other:.2})"
         ),
-        (Some(Basis::Gaussians), Some(other)) => println!(
+        (Some(Basis::Gaussians), Some(other)) => outln!(
             "basis       Gaussians (chosen by evidence; the cubic in the first feature scored {other:.2})"
         ),
         _ => {}
     }
     if let Some(e) = &s.evidence {
-        println!(
+        outln!(
             "evidence    α = {:.4e}  α_linear = {:.4e}  β = {:.4e}  γ = {:.2}  log evidence = {:.2}  ({} settings compared, {} iterations)",
             e.alpha,
             e.alpha_linear,
@@ -181,14 +187,16 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
         );
     }
     if let Some(r) = s.reference_value {
-        println!("reference   constant {r}");
+        outln!("reference   constant {r}");
     }
-    println!(
+    outln!(
         "trained on  {} rows, {} samples after averaging ({} s)",
-        s.train_rows, s.train_bins, s.average_s
+        s.train_rows,
+        s.train_bins,
+        s.average_s
     );
     let t = &s.train;
-    println!(
+    outln!(
         "training    raw std {:.5e}  residual std {:.5e}  improvement {:.1} %   ({} s bins: {:.5e} → {:.5e})",
         t.raw_std,
         t.residual_std,
@@ -197,5 +205,5 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
         t.binned.raw_std,
         t.binned.residual_std
     );
-    println!("wrote       {} ({} bytes)", out.display(), s.blob_bytes);
+    outln!("wrote       {} ({} bytes)", out.display(), s.blob_bytes);
 }

@@ -80,8 +80,18 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             image.len()
         );
     }
-    std::fs::write(&args.out, &image).with_context(|| format!("writing {}", args.out.display()))?;
-    println!(
+    let inputs: Vec<PathBuf> = args
+        .models
+        .iter()
+        .filter_map(|spec| spec.split_once('='))
+        .map(|(_, file)| PathBuf::from(file.trim()))
+        .collect();
+    let inputs: Vec<(&str, &std::path::Path)> =
+        inputs.iter().map(|p| ("--model", p.as_path())).collect();
+    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
+    super::output::check_file_output("--out", &args.out)?;
+    tcomp_train::blob_io::write_atomic(&args.out, &image)?;
+    outln!(
         "wrote {} ({} bytes, {} models): flash it at 0x003F0000",
         args.out.display(),
         image.len(),

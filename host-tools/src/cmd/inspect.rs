@@ -1,7 +1,12 @@
 //! `tcomp inspect MODEL`: print what a blob holds; a corrupt blob is named as such, with the reason.
+//!
+//! Every string taken from the blob goes through [`super::printable`], in the table and in `--json`:
+//! a blob is a file from elsewhere, and its strings must not drive the terminal.
 use clap::Args as ClapArgs;
 use serde_json::json;
 use std::path::PathBuf;
+
+use super::printable::text;
 
 /// Arguments of `tcomp inspect`.
 #[derive(ClapArgs)]
@@ -81,65 +86,76 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         },
     });
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        outln!(
+            "{}",
+            super::printable::json(&serde_json::to_string_pretty(&value)?)
+        );
         return Ok(());
     }
-    println!(
+    outln!(
         "{}: valid tcomp model blob, format version {}, {} bytes",
         args.model.display(),
         m.version,
         bytes.len()
     );
-    println!(
-        "sensor       {:?}  axis {:?}  unit {:?}",
-        m.meta.sensor, m.meta.axis, m.meta.unit
+    outln!(
+        "sensor       {:?}  axis \"{}\"  unit \"{}\"",
+        m.meta.sensor,
+        text(m.meta.axis),
+        text(m.meta.unit)
     );
-    println!("method       {}", m.meta.method);
-    println!(
+    outln!("method       {}", text(m.meta.method));
+    outln!(
         "columns      time {}  target {}  reference {}",
-        c.time,
-        c.target,
+        text(c.time),
+        text(c.target),
         match c.reference_value {
             Some(v) if c.reference.is_empty() => format!("constant {v}"),
-            _ => c.reference.to_string(),
+            _ => text(c.reference),
         }
     );
-    println!(
+    outln!(
         "trained on   {} ({} samples)",
-        m.meta.trained_on, m.meta.train_samples
+        text(m.meta.trained_on),
+        m.meta.train_samples
     );
-    println!("inputs       {}", m.program.inputs.join(", "));
+    outln!("inputs       {}", text(&m.program.inputs.join(", ")));
     for s in &signals {
-        println!("signal       {s}");
+        outln!("signal       {}", text(s));
     }
-    println!(
+    outln!(
         "{:<32} {:>12} {:>12} {:>12}",
-        "feature", "lo", "hi", "linear"
+        "feature",
+        "lo",
+        "hi",
+        "linear"
     );
     for (k, e) in m.program.feature_exprs.iter().enumerate() {
         let r = m.ranges.get(k);
-        println!(
+        outln!(
             "{:<32} {:>12.5} {:>12.5} {:>12.4e}",
-            e,
+            text(e),
             r.map_or(f32::NAN, |r| r.lo),
             r.map_or(f32::NAN, |r| r.hi),
             m.rbf.linear.0.get(k).copied().unwrap_or(0.0)
         );
     }
-    println!("bias         {:.6e}", m.rbf.bias);
-    println!("centers      {}", m.rbf.centers.len());
+    outln!("bias         {:.6e}", m.rbf.bias);
+    outln!("centers      {}", m.rbf.centers.len());
     for (j, c) in m.rbf.centers.iter().enumerate() {
         let (pos, _, w) = c.to_natural();
-        println!(
+        outln!(
             "  {j:>3}  σ {:.3}  w {:+.4e}  at {:?}",
             c.sigma(),
             w,
             pos.0.get(..nf).unwrap_or(&[])
         );
     }
-    println!(
+    outln!(
         "residual     std {:.4e}  binned std {:.4e} ({} s bins)",
-        m.residual.std, m.residual.binned_std, m.residual.bin_s
+        m.residual.std,
+        m.residual.binned_std,
+        m.residual.bin_s
     );
     Ok(())
 }

@@ -1,5 +1,23 @@
 //! One module per subcommand.
 
+/// `println!` for command output, through [`stdout::write`]: never panics on a closed pipe.
+macro_rules! outln {
+    () => {
+        $crate::cmd::stdout::write(format_args!("\n"))
+    };
+    ($($arg:tt)*) => {
+        $crate::cmd::stdout::write(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// `print!` for command output, through [`stdout::write`].
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::cmd::stdout::write(format_args!($($arg)*))
+    };
+}
+
+mod check;
 pub mod compare;
 pub mod demo;
 pub mod diagnose;
@@ -7,6 +25,9 @@ pub mod eval;
 pub mod fit;
 pub mod image;
 pub mod inspect;
+mod output;
+mod printable;
 mod progress;
 pub mod report;
 pub mod simulate;
+pub mod stdout;

@@ -27,6 +27,13 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    super::output::check_file_output("--out", &args.out)?;
+    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", args.data.as_path())];
+    inputs.extend(args.model.iter().map(|m| ("--model", m.as_path())));
+    if let Some(v) = &args.verify {
+        inputs.push(("--verify", v.as_path()));
+    }
+    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
     let first = args
         .model
         .first()
@@ -70,9 +77,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         noise_floor: None,
     })?;
     tcomp_train::blob_io::write_atomic(&args.out, html.as_bytes())?;
-    println!("wrote {}", args.out.display());
+    outln!("wrote {}", args.out.display());
     if let Some(a) = &analysis {
-        println!("{}", a.diagnosis.verdict_text);
+        outln!("{}", a.diagnosis.verdict_text);
     }
     Ok(())
 }
