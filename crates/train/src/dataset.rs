@@ -100,7 +100,9 @@ pub enum DataError {
         value: f64,
     },
     /// Two header cells carry the same name, so a reference to it would be ambiguous.
-    #[error("{file}:1: columns {first} and {second} are both named `{name}`: rename one")]
+    #[error(
+        "{file}:1: duplicate column name: columns {first} and {second} are both named `{name}`; rename one"
+    )]
     DuplicateColumn {
         /// File name.
         file: String,
@@ -122,7 +124,7 @@ pub enum DataError {
         file: String,
         /// The header as read (clipped).
         header: String,
-        /// The separator it seems to use, described (`semicolons (;)`, `tabs`).
+        /// The separator it seems to use, described (``semicolons (`;`)``, ``tabs (`\t`)``).
         sep: &'static str,
         /// Whether numbers seem to be written with a decimal comma.
         decimal_comma: bool,
@@ -275,7 +277,7 @@ impl Dataset {
                 Ok(true) => rec.iter().collect::<Vec<_>>().join(","),
                 _ => String::new(),
             };
-            let sep_char = if sep == "tabs" { '\t' } else { ';' };
+            let sep_char = if sep.starts_with("tabs") { '\t' } else { ';' };
             let decimal_comma = first_row.split(sep_char).any(|f| {
                 let f = f.trim();
                 f.split_once(',').is_some_and(|(a, b)| {
@@ -348,7 +350,7 @@ impl Dataset {
         if lines.len() < 2 {
             return Err(DataError::TooFewRows {
                 file: file.to_string(),
-                what: "only one data row (line 2): at least two are needed, since nothing can \
+                what: "only one data row (line 2): at least 2 are needed, since nothing can \
                        vary over a single sample"
                     .into(),
             });
@@ -507,10 +509,10 @@ impl Dataset {
             .collect();
         if keep.len() < 2 {
             return Err(refuse(format!(
-                "{} selects {} row{} ({span}); at least two are needed",
-                window(),
-                if keep.is_empty() { "no" } else { "only one" },
-                if keep.is_empty() { "s" } else { "" }
+                "--from/--until select {} row{} ({}; {span}): at least 2 are needed",
+                keep.len(),
+                if keep.len() == 1 { "" } else { "s" },
+                window()
             )));
         }
         let pick = |v: &Vec<f64>| keep.iter().filter_map(|&i| v.get(i).copied()).collect();
@@ -540,8 +542,8 @@ impl Dataset {
 /// The separator a one-column header seems to use instead of commas, described, if any.
 fn other_separator(names: &[String]) -> Option<&'static str> {
     match names {
-        [only] if only.contains(';') => Some("semicolons (;)"),
-        [only] if only.contains('\t') => Some("tabs"),
+        [only] if only.contains(';') => Some("semicolons (`;`)"),
+        [only] if only.contains('\t') => Some("tabs (`\\t`)"),
         _ => None,
     }
 }

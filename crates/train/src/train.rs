@@ -764,10 +764,11 @@ pub fn evaluate(
     temperature: Option<&str>,
     gap_s: Option<f64>,
 ) -> Result<EvalReport, TrainError> {
-    crate::options::check_bin("--bin", bin_s, data.time(&roles.time)?)?;
     if let Some(g) = gap_s {
         crate::options::GAP.check(g)?;
     }
     let run = metrics::run_model(model, data, roles, temperature, gap_s)?;
+    // After the run, so that a bad cell is reported before the bin it would have been binned in.
+    crate::options::check_bin("--bin", bin_s, &run.time)?;
     Ok(metrics::report(&run, bin_s))
 }

@@ -263,13 +263,13 @@ fn one_row_or_an_empty_window_is_named_not_a_constant_feature() {
     let e = fit(&d, &opts).unwrap_err().to_string();
     assert!(!e.contains("constant"), "{e}");
     assert!(
-        e.contains("--from 5000") && e.contains("selects no rows"),
+        e.contains("--from 5000") && e.contains("select 0 rows"),
         "{e}"
     );
     assert!(e.contains("from 0 s to 2999 s"), "{e}");
     opts.from = Some(2999.0);
     let e = fit(&d, &opts).unwrap_err().to_string();
-    assert!(e.contains("selects only one row"), "{e}");
+    assert!(e.contains("select 1 row "), "{e}");
     let e = d
         .select_time("time_s", f64::NEG_INFINITY, -1.0)
         .unwrap_err();
