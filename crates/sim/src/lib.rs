@@ -157,11 +157,12 @@ impl Staged {
         }
     }
 
-    /// The temporary path for the final file `name` (same directory, so the rename is atomic).
+    /// The temporary path for the final file `name` (same directory, so the rename is atomic;
+    /// the name ends as the final one does, so `.gz` still selects compression).
     fn add(&mut self, name: &str) -> std::path::PathBuf {
         let tmp = self
             .dir
-            .join(format!(".{name}.{}.partial", std::process::id()));
+            .join(format!(".partial-{}-{name}", std::process::id()));
         self.files.push((tmp.clone(), name.to_string()));
         tmp
     }

@@ -123,3 +123,14 @@ fn a_good_run_replaces_the_files_and_reports_its_rows() {
         .collect();
     assert_eq!(names.len(), 3, "{names:?}");
 }
+
+#[test]
+fn gzip_output_is_gzip_after_staging() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = short(presets::preset("qma").unwrap());
+    write_preset(&p, dir.path(), true).unwrap();
+    for f in ["train.csv.gz", "verify.csv.gz"] {
+        let bytes = std::fs::read(dir.path().join(f)).unwrap();
+        assert_eq!(bytes.get(..2), Some(&[0x1f, 0x8b][..]), "{f} is not gzip");
+    }
+}

@@ -417,6 +417,13 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
             data.line(s)
         ));
     }
+    // Options built in code rather than by `from_spec` get the same checks.
+    if let Some(a) = opts.average_s {
+        options::AVERAGE.check(a)?;
+    }
+    if let Some(g) = opts.gap_s {
+        options::GAP.check(g)?;
+    }
     let span = time.last().copied().unwrap_or(0.0) - time.first().copied().unwrap_or(0.0);
     let step = crate::dataset::median_step(time);
     if let Some(a) = opts.average_s
@@ -554,12 +561,11 @@ fn check_memory(
         return Ok(());
     }
     let step = crate::dataset::median_step(time);
-    let suggestion = [
-        0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 30.0, 60.0, 120.0, 300.0, 600.0,
-    ]
-    .into_iter()
-    .filter(|&a| a >= step && a > opts.average_s.unwrap_or(0.0))
-    .find(|&a| estimate(&shape(opts, time.len(), bins(time, a).len())) <= opts.memory_budget);
+    // From 1 s up: a bin that only just fits the budget would still be a fit of hours.
+    let suggestion = [1.0, 2.0, 5.0, 10.0, 30.0, 60.0, 120.0, 300.0, 600.0]
+        .into_iter()
+        .filter(|&a| a >= step && a > opts.average_s.unwrap_or(0.0))
+        .find(|&a| estimate(&shape(opts, time.len(), bins(time, a).len())) <= opts.memory_budget);
     let averaged = match opts.average_s {
         Some(a) if a > 0.0 => format!("averaged into {a} s bins"),
         Some(_) => "unaveraged".to_string(),
@@ -575,8 +581,8 @@ fn check_memory(
         human(opts.memory_budget),
         match suggestion {
             Some(a) => format!(
-                "; average into bins (e.g. --average {a}, which needs {}), or pick a shorter \
-                 window with --from/--until",
+                "; average into bins (e.g. --average {a}, which needs {}; without --average the \
+                 default is {DEFAULT_AVERAGE_S} s), or pick a shorter window with --from/--until",
                 human(estimate(&shape(opts, time.len(), bins(time, a).len())))
             ),
             None => "; pick a shorter window with --from/--until".to_string(),
@@ -613,6 +619,12 @@ pub fn fit_with_progress(
     } = prepare(data, opts)?;
     let time = data.time(&opts.time)?;
     let centers = opts.centers.unwrap_or(DEFAULT_CENTERS);
+    if matches!(opts.method, Method::Mse | Method::Gradient) {
+        options::CENTERS.check_count(centers, &format!(" with --method {}", opts.method))?;
+    }
+    if opts.method == Method::Gradient {
+        options::ITERATIONS.check_count(opts.iterations, "")?;
+    }
     let need = match opts.method {
         Method::Bayes => 10,
         Method::Poly3 => 8,

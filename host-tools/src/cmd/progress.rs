@@ -71,6 +71,13 @@ impl Bar {
     }
 }
 
+/// A run that fails mid-way leaves no half-drawn bar above its error message.
+impl Drop for Bar {
+    fn drop(&mut self) {
+        self.pb.finish_and_clear();
+    }
+}
+
 impl tcomp_train::progress::Progress for Bar {
     fn start(&self, what: &str, total: u64, unit: tcomp_train::progress::Unit) {
         use tcomp_train::progress::Unit;
