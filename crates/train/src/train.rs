@@ -424,6 +424,13 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
     if let Some(g) = opts.gap_s {
         options::GAP.check(g)?;
     }
+    if matches!(opts.method, Method::Mse | Method::Gradient) {
+        let centers = opts.centers.unwrap_or(DEFAULT_CENTERS);
+        options::CENTERS.check_count(centers, &format!(" with --method {}", opts.method))?;
+    }
+    if opts.method == Method::Gradient {
+        options::ITERATIONS.check_count(opts.iterations, "")?;
+    }
     let span = time.last().copied().unwrap_or(0.0) - time.first().copied().unwrap_or(0.0);
     let step = crate::dataset::median_step(time);
     if let Some(a) = opts.average_s
@@ -492,6 +499,19 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
                 .collect()
         })
         .collect();
+    // Too few rows is said as such (after any bad cell they hold), before a feature over them
+    // looks constant.
+    let need = min_samples(opts);
+    if time.len() < need {
+        return Err(DataError::TooFewSamples {
+            file: data.file().to_string(),
+            have: time.len(),
+            need,
+            after: " (rows)".to_string(),
+            why: format!("method {}", opts.method),
+        }
+        .into());
+    }
     check_features(&spec, &columns, opts.method != Method::Poly3)?;
     let mut ranges = Vec::with_capacity(nf);
     for k in 0..nf {
@@ -528,6 +548,15 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
         cubic,
         warnings,
     })
+}
+
+/// The fewest training samples (after averaging) the method can be fitted on.
+fn min_samples(opts: &FitOptions) -> usize {
+    match opts.method {
+        Method::Bayes => 10,
+        Method::Poly3 => 8,
+        Method::Mse | Method::Gradient => 2 * opts.centers.unwrap_or(DEFAULT_CENTERS) + 2,
+    }
 }
 
 /// The shape of a fit of `samples` training samples over `rows` rows with `opts`.
@@ -619,17 +648,7 @@ pub fn fit_with_progress(
     } = prepare(data, opts)?;
     let time = data.time(&opts.time)?;
     let centers = opts.centers.unwrap_or(DEFAULT_CENTERS);
-    if matches!(opts.method, Method::Mse | Method::Gradient) {
-        options::CENTERS.check_count(centers, &format!(" with --method {}", opts.method))?;
-    }
-    if opts.method == Method::Gradient {
-        options::ITERATIONS.check_count(opts.iterations, "")?;
-    }
-    let need = match opts.method {
-        Method::Bayes => 10,
-        Method::Poly3 => 8,
-        Method::Mse | Method::Gradient => 2 * centers + 2,
-    };
+    let need = min_samples(opts);
     if y.len() < need {
         return Err(DataError::TooFewSamples {
             file: data.file().to_string(),

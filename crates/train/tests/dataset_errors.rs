@@ -291,3 +291,16 @@ fn a_runtime_division_by_zero_names_the_expression_and_the_row() {
     assert!(e.contains("run.csv:2"), "{e}");
     assert!(e.contains("feature 2 `1 / (t_coil_c - 20)`"), "{e}");
 }
+
+#[test]
+fn a_few_rows_are_too_few_samples_not_a_constant_feature() {
+    let d = Dataset::from_reader("few.csv", good_csv(3).as_bytes()).unwrap();
+    let e = fit(&d, &FitOptions::new("gyro_dph", &["t_coil_c"]))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("few.csv") && e.contains("3 samples (rows)"),
+        "{e}"
+    );
+    assert!(!e.contains("constant"), "{e}");
+}
