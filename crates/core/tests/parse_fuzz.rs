@@ -197,25 +197,25 @@ fn constant() -> impl Strategy<Value = E> {
     })
 }
 
-/// A typical parameter (a positive number), any constant expression, or now and then something
-/// that is not a constant.
-fn param(inner: BoxedStrategy<E>) -> BoxedStrategy<E> {
+/// A typical parameter (a positive number) or any constant expression. Built once: proptest
+/// rebuilds a recursive strategy's levels for every case, so what they share is made outside.
+fn constant_param() -> BoxedStrategy<E> {
     let typical = (decimal(1..=500_000, -2..=-2), any::<bool>()).prop_map(|(v, e)| E::Lit(v, e));
-    prop_oneof![12 => typical, 4 => constant(), 1 => inner].boxed()
+    prop_oneof![3 => typical, 1 => constant()].boxed()
 }
 
-/// The limits of a clamp: mostly in order, sometimes any two parameters.
-fn limits(inner: BoxedStrategy<E>) -> BoxedStrategy<(E, E)> {
+/// Two ordered constants, the limits of a clamp.
+fn ordered_limits() -> BoxedStrategy<(E, E)> {
     let signed = |v: f32| {
         let l = E::Lit(v.abs(), false);
         if v < 0.0 { E::Neg(Box::new(l)) } else { l }
     };
-    let ordered = (
+    (
         decimal(-500_000..=500_000, -3..=-3),
         decimal(0..=500_000, -3..=-3),
     )
-        .prop_map(move |(lo, w)| (signed(lo), signed(lo + w)));
-    prop_oneof![4 => ordered, 1 => (param(inner.clone()), param(inner))].boxed()
+        .prop_map(move |(lo, w)| (signed(lo), signed(lo + w)))
+        .boxed()
 }
 
 fn expr() -> BoxedStrategy<E> {
@@ -224,8 +224,14 @@ fn expr() -> BoxedStrategy<E> {
         1 => (0u8..4).prop_map(E::Signal),
         2 => lit(),
     ];
-    leaf.prop_recursive(5, 48, 4, |inner| {
+    let constant = constant_param();
+    let ordered = ordered_limits();
+    leaf.prop_recursive(5, 48, 4, move |inner| {
         let b = |e: E| Box::new(e);
+        // A parameter: mostly a constant, now and then something that is not.
+        let param = prop_oneof![16 => constant.clone(), 1 => inner.clone()].boxed();
+        // The limits of a clamp: mostly in order, sometimes any two parameters.
+        let limits = prop_oneof![4 => ordered.clone(), 1 => (param.clone(), param.clone())];
         prop_oneof![
             2 => inner.clone().prop_map(move |e| E::Neg(b(e))),
             6 => (binop(), inner.clone(), inner.clone(), any::<bool>())
@@ -234,11 +240,11 @@ fn expr() -> BoxedStrategy<E> {
             1 => inner.clone().prop_map(move |e| E::Sq(b(e))),
             1 => inner.clone().prop_map(move |e| E::Abs(b(e))),
             1 => proptest::collection::vec(inner.clone(), 1..5).prop_map(E::Mean),
-            1 => (inner.clone(), proptest::option::of(param(inner.clone())))
+            1 => (inner.clone(), proptest::option::of(param.clone()))
                 .prop_map(move |(x, p)| E::Rate(b(x), p.map(b))),
-            1 => (inner.clone(), param(inner.clone())).prop_map(move |(x, p)| E::Lag(b(x), b(p))),
-            1 => (inner.clone(), param(inner.clone())).prop_map(move |(x, p)| E::Hyst(b(x), b(p))),
-            1 => (inner.clone(), limits(inner))
+            1 => (inner.clone(), param.clone()).prop_map(move |(x, p)| E::Lag(b(x), b(p))),
+            1 => (inner.clone(), param).prop_map(move |(x, p)| E::Hyst(b(x), b(p))),
+            1 => (inner, limits)
                 .prop_map(move |(x, (lo, hi))| E::Clamp(b(x), b(lo), b(hi))),
         ]
     })
