@@ -20,6 +20,7 @@
 pub mod blob;
 pub mod compensator;
 pub mod fastexp;
+pub mod image;
 pub mod parse;
 pub mod point;
 pub mod program;
