@@ -12,15 +12,18 @@
 //!   [`status::SENSOR_ERROR`];
 //! * a thermometer returning the very same bits for [`STUCK_SAMPLES`] samples flags
 //!   [`status::STUCK`] (a 24-bit ADC on a live sensor never does);
-//! * a counter read that fails gives a NaN raw value (flagged); the pulses are not lost, the next good
-//!   read covers the missed periods and is divided by their total length;
+//! * a counter read that fails on the bus gives a NaN raw value (flagged); the pulses are not lost,
+//!   the next good read covers the missed periods and is divided by their total length;
+//! * a counter interval the hardware flags (pulses lost, instrument or clock fault) was consumed: that
+//!   sample's raw value is NaN with [`status::SENSOR_ERROR`], and the next interval is one period
+//!   again ([`tcomp_hal::Interval`] tells the two apart);
 //! * a channel whose blob is missing, corrupt or reads inputs it is not wired to runs with
 //!   `NO_MODEL`: raw value passed through, flagged.
 
 use crate::image::{Image, ImageError};
 use tcomp_core::{BlobError, Channel, MAX_INPUTS, Model};
 use tcomp_hal::scale::ChannelScale;
-use tcomp_hal::{PulseCounter, Thermometer};
+use tcomp_hal::{CounterSnapshot, ErrorKind, Interval, PulseCounter, Thermometer};
 
 /// Centers per model in the firmware (the core's [`tcomp_core::FLIGHT_CENTERS`], which the host
 /// tools check blobs against).
@@ -262,14 +265,41 @@ impl<'a> App<'a> {
         self.config
     }
 
-    /// One period: read all sensors, step all channels, write one record per channel into `out`
-    /// (as many as both have).
+    /// One period with one [`PulseCounter`] per counter: read all sensors, step all channels, write
+    /// one record per channel into `out` (as many as both have). Each counter error is classified by
+    /// its kind ([`Interval::from_result`]): a flagged interval was consumed, a bus error was not.
     pub fn sample<T: Thermometer, P: PulseCounter>(
         &mut self,
         thermometers: &mut [T],
         counters: &mut [P],
         out: &mut [Record],
     ) {
+        self.read_thermometers(thermometers);
+        let mut intervals = [Interval::Unread(ErrorKind::NotReady); MAX_COUNTERS];
+        for (c, i) in counters.iter_mut().zip(intervals.iter_mut()) {
+            *i = Interval::from_result(c.read_delta());
+        }
+        let n = counters.len().min(MAX_COUNTERS);
+        self.step_all(intervals.get(..n).unwrap_or(&[]), out);
+    }
+
+    /// One period with a counter block latched once for all channels ([`CounterSnapshot`]: one SPI
+    /// frame, every instrument at the same instant): read all sensors, step all channels, write one
+    /// record per channel into `out` (as many as both have). Counter `i` of the configuration is
+    /// channel `i` of the block.
+    pub fn sample_snapshot<T: Thermometer, C: CounterSnapshot>(
+        &mut self,
+        thermometers: &mut [T],
+        counters: &mut C,
+        out: &mut [Record],
+    ) {
+        self.read_thermometers(thermometers);
+        let mut intervals = [Interval::Unread(ErrorKind::NotReady); MAX_COUNTERS];
+        counters.read_snapshot(&mut intervals);
+        self.step_all(&intervals, out);
+    }
+
+    fn read_thermometers<T: Thermometer>(&mut self, thermometers: &mut [T]) {
         for (t, s) in thermometers.iter_mut().zip(self.therms.iter_mut()) {
             match t.read_celsius() {
                 Ok(v) => {
@@ -292,15 +322,23 @@ impl<'a> App<'a> {
                 }
             }
         }
-        // Counts and the interval they cover (longer after failed reads); `None` on a failed read.
+    }
+
+    /// Turns each counter's interval into counts and the time they cover, then steps every channel.
+    fn step_all(&mut self, intervals: &[Interval], out: &mut [Record]) {
+        // Counts and the interval they cover (longer after unread intervals); `None` when there is
+        // no valid count this period.
         let mut pulses = [None; MAX_COUNTERS];
-        for ((c, p), missed) in counters.iter_mut().zip(&mut pulses).zip(&mut self.missed) {
-            match c.read_delta() {
-                Ok(counts) => {
+        for ((i, p), missed) in intervals.iter().zip(&mut pulses).zip(&mut self.missed) {
+            match *i {
+                Interval::Counted(counts) => {
                     *p = Some((counts, PERIOD_S * f32::from(missed.saturating_add(1))));
                     *missed = 0;
                 }
-                Err(_) => *missed = missed.saturating_add(1),
+                // Consumed: those pulses are gone, the next interval is one period.
+                Interval::Flagged(_) => *missed = 0,
+                // Still in the counter: the next good read covers this period too.
+                Interval::Unread(_) => *missed = missed.saturating_add(1),
             }
         }
         for (k, rec) in out.iter_mut().take(self.config.len()).enumerate() {
@@ -351,3 +389,7 @@ impl<'a> App<'a> {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "app_tests.rs"]
+mod tests;
