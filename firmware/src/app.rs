@@ -54,20 +54,12 @@ pub const MAX_CHANNELS: usize = 6;
 /// sample (see BENCHMARKS.md for both instruction counts).
 pub const MODEL_INTERVAL: u16 = MAX_CHANNELS as u16;
 
-/// The status word of one output: the core's [`tcomp_core::Status`] bits plus the loop's own.
+/// The status word of one output: the core's [`tcomp_core::Status`] bits plus the loop's own, defined
+/// once with their names in [`tcomp_core::frame::status`] (the frame carries this word).
 pub mod status {
-    /// Model present, inputs good and in range.
-    pub const OK: u16 = 0;
-    /// No valid model: raw passed through (core bit).
-    pub const NO_MODEL: u16 = 1;
-    /// A feature outside its trained range, clamped (core bit).
-    pub const OUT_OF_RANGE: u16 = 2;
-    /// A NaN/infinite input or raw value: last good features held (core bit).
-    pub const INPUT_FAULT: u16 = 4;
-    /// A thermometer or counter read of this channel returned an error.
-    pub const SENSOR_ERROR: u16 = 8;
-    /// A thermometer of this channel has returned identical readings for too long.
-    pub const STUCK: u16 = 16;
+    pub use tcomp_core::frame::status::{
+        INPUT_FAULT, NO_MODEL, OK, OUT_OF_RANGE, SENSOR_ERROR, STUCK,
+    };
 }
 
 /// One channel of a configuration: which thermometers (by the model's input column names) and which
@@ -176,6 +168,12 @@ pub struct Record {
     pub compensated: f32,
     /// [`status`] bits.
     pub status: u16,
+    /// The model's correction that was subtracted (0 without a model).
+    pub correction: f32,
+    /// The exact pulse count of the interval …
+    pub counts: i32,
+    /// … and its length in loop periods (0: no valid count this sample).
+    pub periods: u16,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -332,7 +330,7 @@ impl<'a> App<'a> {
         for ((i, p), missed) in intervals.iter().zip(&mut pulses).zip(&mut self.missed) {
             match *i {
                 Interval::Counted(counts) => {
-                    *p = Some((counts, PERIOD_S * f32::from(missed.saturating_add(1))));
+                    *p = Some((counts, missed.saturating_add(1)));
                     *missed = 0;
                 }
                 // Consumed: those pulses are gone, the next interval is one period.
@@ -346,7 +344,7 @@ impl<'a> App<'a> {
         }
     }
 
-    fn step_channel(&mut self, k: usize, pulses: &[Option<(i32, f32)>; MAX_COUNTERS]) -> Record {
+    fn step_channel(&mut self, k: usize, pulses: &[Option<(i32, u16)>; MAX_COUNTERS]) -> Record {
         let (Some(cfg), Some(channel), Some(map), Some(n)) = (
             self.config.get(k),
             self.channels.get_mut(k),
@@ -356,13 +354,18 @@ impl<'a> App<'a> {
             return Record::default();
         };
         let mut flags = 0u16;
-        let raw = match pulses.get(usize::from(cfg.counter)).copied().flatten() {
-            Some((counts, dt)) => cfg.scale.rate(counts, dt).unwrap_or(f32::NAN),
+        let pulses = pulses.get(usize::from(cfg.counter)).copied().flatten();
+        let raw = match pulses {
+            Some((counts, periods)) => cfg
+                .scale
+                .rate(counts, PERIOD_S * f32::from(periods))
+                .unwrap_or(f32::NAN),
             None => {
                 flags |= status::SENSOR_ERROR;
                 f32::NAN
             }
         };
+        let (counts, periods) = pulses.unwrap_or((0, 0));
         for &(_, t) in cfg.thermometers {
             if let Some(s) = self.therms.get(usize::from(t)) {
                 if s.error {
@@ -386,7 +389,27 @@ impl<'a> App<'a> {
         Record {
             compensated: o.compensated,
             status: u16::from(o.status.0) | flags,
+            correction: o.correction,
+            counts,
+            periods,
         }
+    }
+
+    /// Channel `k`'s output at the sensor's full resolution, for the output frame:
+    /// `counts · per_pulse / interval − correction` in f64 from the record's exact pulse count (the
+    /// f32 [`Record::compensated`] steps by 0.031 °/h at 360,000 °/h; this by 10⁻¹⁰). NaN wherever
+    /// `compensated` is NaN (no valid count, a NaN correction). See [`tcomp_core::frame`] for the
+    /// error bound. Not on the loop's path: the QEMU replay compares the f32 records.
+    pub fn precise_value(&self, k: usize, rec: &Record) -> f64 {
+        let Some(cfg) = self.config.get(k) else {
+            return f64::NAN;
+        };
+        if rec.compensated.is_nan() || rec.periods == 0 {
+            return f64::NAN;
+        }
+        let interval = f64::from(PERIOD_S) * f64::from(rec.periods);
+        f64::from(rec.counts) * f64::from(cfg.scale.per_pulse()) / interval
+            - f64::from(rec.correction)
     }
 }
 

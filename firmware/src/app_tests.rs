@@ -206,3 +206,46 @@ fn one_snapshot_per_sample_and_a_flagged_channel_alone() {
     }
     spi.done();
 }
+
+#[test]
+fn precise_value_keeps_the_pulse_resolution_at_high_rates() {
+    // 360,000 °/h on an RLG at 1e-5 arcsec per pulse is
+    // 1.8e8 pulses per 5 ms period. One pulse more must show in the frame's value, not in the f32.
+    let counts = 180_000_000i32;
+    let mut e = id_frame();
+    e.extend(snapshot(0, 0, &[0]));
+    e.extend(snapshot(0, TICKS, &[counts as u32]));
+    e.extend(snapshot(0, 2 * TICKS, &[2 * counts as u32 + 1]));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 1> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    let mut app = App::new(&IMU6);
+    let mut therms = thermometers();
+    let mut out = [Record::default(); MAX_CHANNELS];
+    let mut counters = [&mut block];
+
+    app.sample(&mut therms, &mut counters, &mut out);
+    let a = app.precise_value(0, &out[0]);
+    let f32_a = out[0].compensated;
+    app.sample(&mut therms, &mut counters, &mut out);
+    let b = app.precise_value(0, &out[0]);
+    let f32_b = out[0].compensated;
+    // The exact rate of one pulse per period, °/h (arcsec/s).
+    let pulse = f64::from(RLG_ARCSEC_PER_PULSE) / f64::from(PERIOD_S);
+    assert!((a - 360_000.0).abs() < 0.1, "{a}");
+    assert!(
+        ((b - a) - pulse).abs() < 1e-6 * pulse,
+        "{} vs {pulse}",
+        b - a
+    );
+    // The f32 output cannot tell them apart.
+    assert_eq!(f32_a, f32_b);
+    // No valid count: NaN.
+    let flagged = Record {
+        compensated: f32::NAN,
+        periods: 0,
+        ..out[0]
+    };
+    assert!(app.precise_value(0, &flagged).is_nan());
+    spi.done();
+}

@@ -5,6 +5,7 @@ pub mod demo;
 pub mod diagnose;
 pub mod eval;
 pub mod fit;
+pub mod frames;
 pub mod image;
 pub mod inspect;
 mod progress;
