@@ -284,16 +284,17 @@ impl<'a> App<'a> {
     /// One period with a counter block latched once for all channels ([`CounterSnapshot`]: one SPI
     /// frame, every instrument at the same instant): read all sensors, step all channels, write one
     /// record per channel into `out` (as many as both have). Counter `i` of the configuration is
-    /// channel `i` of the block.
+    /// channel `i` of the block. The counters are latched first, a fixed latency after the timer
+    /// edge that started the period, and the thermometers read after.
     pub fn sample_snapshot<T: Thermometer, C: CounterSnapshot>(
         &mut self,
         thermometers: &mut [T],
         counters: &mut C,
         out: &mut [Record],
     ) {
-        self.read_thermometers(thermometers);
         let mut intervals = [Interval::Unread(ErrorKind::NotReady); MAX_COUNTERS];
         counters.read_snapshot(&mut intervals);
+        self.read_thermometers(thermometers);
         self.step_all(&intervals, out);
     }
 
