@@ -21,6 +21,7 @@
 //!   `NO_MODEL`: raw value passed through, flagged.
 
 use crate::image::{Image, ImageError};
+use tcomp_core::frame::{ChannelOutput, Frame, MAX_CHANNELS as FRAME_CHANNELS};
 use tcomp_core::{BlobError, Channel, MAX_INPUTS, Model};
 use tcomp_hal::scale::ChannelScale;
 use tcomp_hal::{CounterSnapshot, ErrorKind, Interval, PulseCounter, Thermometer};
@@ -394,6 +395,27 @@ impl<'a> App<'a> {
             counts,
             periods,
         }
+    }
+
+    /// The output frame of one sample: `records` (as [`sample`](Self::sample) wrote them, one per
+    /// channel of the configuration) as [`precise_value`](Self::precise_value)s with their status
+    /// words, stamped with `sequence` and `timestamp` ticks of `tick_hz`. Encode it with
+    /// [`Frame::encode`].
+    pub fn frame(&self, sequence: u32, timestamp: u64, tick_hz: u32, records: &[Record]) -> Frame {
+        let mut outputs = [ChannelOutput::default(); FRAME_CHANNELS];
+        let n = self.config.len().min(records.len()).min(FRAME_CHANNELS);
+        for (k, (o, rec)) in outputs.iter_mut().zip(records).take(n).enumerate() {
+            *o = ChannelOutput {
+                value: self.precise_value(k, rec),
+                status: rec.status,
+            };
+        }
+        Frame::new(
+            sequence,
+            timestamp,
+            tick_hz,
+            outputs.get(..n).unwrap_or(&[]),
+        )
     }
 
     /// Channel `k`'s output at the sensor's full resolution, for the output frame:

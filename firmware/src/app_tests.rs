@@ -249,3 +249,65 @@ fn precise_value_keeps_the_pulse_resolution_at_high_rates() {
     assert!(app.precise_value(0, &flagged).is_nan());
     spi.done();
 }
+
+#[test]
+fn frames_of_the_loop_decode_to_its_outputs() {
+    // What the board does every period, on the host: latch, step, frame, encode; then the host's
+    // decoder. Channel 2 is flagged in the second interval.
+    let per_period: [u32; 6] = [1_000, 2_000, 3_000, 400, 500, 600];
+    let at = |n: u32| -> Vec<u32> { per_period.iter().map(|p| p * n).collect() };
+    let mut e = id_frame();
+    e.extend(snapshot(0, 0, &at(0)));
+    e.extend(snapshot(0, TICKS, &at(1)));
+    e.extend(snapshot(
+        1 << (block_status::LOST_SHIFT + 2),
+        2 * TICKS,
+        &at(2),
+    ));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 6> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    let mut app = App::new(&IMU6);
+    let mut therms = thermometers();
+    let mut out = [Record::default(); MAX_CHANNELS];
+    let mut wire = Vec::new();
+    let mut sent = Vec::new();
+    for seq in 0..2u32 {
+        app.sample_snapshot(&mut therms, &mut block, &mut out);
+        let frame = app.frame(seq, u64::from(seq + 1) * 5_000, 1_000_000, &out);
+        let mut buf = [0u8; tcomp_core::frame::MAX_FRAME_LEN];
+        let n = frame.encode(&mut buf).unwrap();
+        wire.extend_from_slice(&buf[..n]);
+        sent.push(out);
+    }
+    let mut decoder = tcomp_core::frame::Decoder::new();
+    let mut got = Vec::new();
+    decoder.feed(&wire, |f| got.push(f));
+    assert_eq!(got.len(), 2);
+    for (f, recs) in got.iter().zip(&sent) {
+        assert_eq!(f.channels().len(), IMU6.len());
+        for (k, (c, rec)) in f.channels().iter().zip(recs).enumerate() {
+            assert_eq!(c.status, rec.status, "channel {k}");
+            let expected = app.precise_value(k, rec);
+            if expected.is_nan() {
+                assert_eq!(c.value.to_bits(), tcomp_core::frame::CANONICAL_NAN_BITS);
+            } else {
+                assert_eq!(c.value, expected, "channel {k}");
+                // The f64 value is the exact count over one period (no model: no correction).
+                let exact = f64::from(per_period[k]) * f64::from(IMU6[k].scale.per_pulse())
+                    / f64::from(PERIOD_S);
+                assert!(
+                    (c.value - exact).abs() <= 1e-12 * exact.abs(),
+                    "channel {k}"
+                );
+            }
+        }
+    }
+    assert!(got[1].channels()[2].value.is_nan());
+    assert_eq!(
+        got[1].channels()[2].status,
+        status::NO_MODEL | status::SENSOR_ERROR
+    );
+    assert_eq!(got[1].time_s(), 0.01);
+    spi.done();
+}

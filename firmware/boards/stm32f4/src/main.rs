@@ -34,7 +34,7 @@ fn models_image() -> &'static [u8] {
     unsafe { core::slice::from_raw_parts(start, len) }
 }
 
-/// Bytes the UART queue holds: four six-channel frames (84 B each) with room to spare. At 921,600
+/// Bytes the UART queue holds (511 usable): six 84-byte six-channel frames. At 921,600
 /// baud one frame takes 0.9 ms, so the queue never fills unless the line is stalled.
 const TX_QUEUE: usize = 512;
 
@@ -46,7 +46,7 @@ mod app {
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::serial::{TxISR, TxListen};
     use stm32f4xx_hal::timer::Flag;
-    use tcomp_core::frame::{ChannelOutput, Frame, MAX_CHANNELS as FRAME_CHANNELS, MAX_FRAME_LEN};
+    use tcomp_core::frame::MAX_FRAME_LEN;
     use tcomp_firmware::app::{App, IMU6, MAX_CHANNELS, Record};
 
     use crate::setup::{self, Counters, FrameTx, SampleTimer, Spi1Bus, TICK_HZ, TICKS_PER_PERIOD};
@@ -144,19 +144,11 @@ mod app {
         l.app
             .sample_snapshot(l.thermometers, l.counters, &mut records);
 
-        let mut outputs = [ChannelOutput::default(); FRAME_CHANNELS];
-        let n = l.app.config().len().min(MAX_CHANNELS);
-        for (k, (o, rec)) in outputs.iter_mut().zip(records.iter()).take(n).enumerate() {
-            *o = ChannelOutput {
-                value: l.app.precise_value(k, rec),
-                status: rec.status,
-            };
-        }
-        let frame = Frame::new(
+        let frame = l.app.frame(
             *l.sequence,
             l.periods.wrapping_mul(u64::from(TICKS_PER_PERIOD)),
             TICK_HZ,
-            outputs.get(..n).unwrap_or(&[]),
+            &records,
         );
         *l.sequence = l.sequence.wrapping_add(1);
         let mut buf = [0u8; MAX_FRAME_LEN];
