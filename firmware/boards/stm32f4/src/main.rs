@@ -82,14 +82,14 @@ mod app {
             }
         };
         defmt::info!("reset cause: {}", devices.reset_cause);
-        if let Some(f) = devices.fault {
+        if let Some((f, kind)) = devices.fault.and_then(|f| Some((f, f.valid()?))) {
             defmt::error!(
-                "previous run ended in {} at {=str}:{=u32} (pc/line {=u32:#010x}, lr {=u32:#010x})",
-                f.kind,
+                "previous run ended in {} at {=str}:{=u32} (lr {=u32:#010x}; for a HardFault the \
+                 number is the PC)",
+                kind,
                 f.file(),
-                f.line_or_pc,
-                f.line_or_pc,
-                f.lr
+                f.line_or_pc(),
+                f.lr()
             );
         }
         let mut app = App::new(&IMU6);

@@ -81,7 +81,7 @@ pub struct Devices {
     /// Why the chip last reset.
     pub reset_cause: ResetCause,
     /// The fault the previous run recorded, if any.
-    pub fault: Option<fault::Fault>,
+    pub fault: Option<tcomp_firmware::fault::FaultRecord>,
 }
 
 /// What can stop the board from starting at all.
