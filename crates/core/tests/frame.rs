@@ -112,10 +112,21 @@ fn encode_errors() {
 #[test]
 fn status_names() {
     let mut names = Vec::new();
-    status::for_each_name(status::NO_MODEL | status::SENSOR_ERROR | 0x200, |n| {
-        names.push(n)
+    status::for_each_name(
+        status::NO_MODEL | status::SENSOR_ERROR | 0x200 | status::OVERRUN,
+        |n| names.push(n),
+    );
+    assert_eq!(
+        names,
+        [Ok("no-model"), Ok("sensor-error"), Err(9), Ok("overrun")]
+    );
+    // Every named bit is a single bit, and no two share one.
+    let all = status::NAMES.iter().fold(0u16, |acc, (m, _)| {
+        assert_eq!(m.count_ones(), 1);
+        assert_eq!(acc & m, 0);
+        acc | m
     });
-    assert_eq!(names, [Ok("no-model"), Ok("sensor-error"), Err(9)]);
+    assert_eq!(all.count_ones() as usize, status::NAMES.len());
 }
 
 #[test]

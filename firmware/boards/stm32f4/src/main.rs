@@ -3,7 +3,8 @@
 //! * `sample` — bound to TIM2's update interrupt (200 Hz), the highest priority: latches the counter
 //!   block's snapshot, reads the thermometers, runs [`App::sample_snapshot`] (the very loop the
 //!   host tests and the QEMU replay run), encodes one [`Frame`] into the UART queue, feeds the
-//!   watchdog and counts overruns (TIM2's update flag set again before the work is done).
+//!   watchdog and counts overruns (TIM2's update flag set again before the work is done); the
+//!   next frame, the late one, carries `OVERRUN` on every channel.
 //! * `uart` — bound to USART1 at a lower priority: drains the queue one byte per TXE interrupt.
 //!   A frame that does not fit in the queue is dropped whole; its sequence number is still used, so
 //!   the host sees the gap.
@@ -47,7 +48,7 @@ mod app {
     use stm32f4xx_hal::serial::{TxISR, TxListen};
     use stm32f4xx_hal::timer::Flag;
     use tcomp_core::frame::MAX_FRAME_LEN;
-    use tcomp_firmware::app::{App, IMU6, MAX_CHANNELS, Record};
+    use tcomp_firmware::app::{App, IMU6, MAX_CHANNELS, Record, status};
 
     use crate::setup::{self, Counters, FrameTx, SampleTimer, Spi1Bus, TICK_HZ, TICKS_PER_PERIOD};
     use stm32f4xx_hal::watchdog::IndependentWatchdog;
@@ -133,7 +134,7 @@ mod app {
     /// One loop period, on TIM2's update.
     #[task(binds = TIM2, priority = 2, local = [
         app, thermometers, counters, timer, watchdog, producer,
-        sequence: u32 = 0, periods: u64 = 0, overruns: u32 = 0, dropped: u32 = 0,
+        sequence: u32 = 0, periods: u64 = 0, overruns: u32 = 0, dropped: u32 = 0, late: bool = false,
     ])]
     fn sample(cx: sample::Context) {
         let l = cx.local;
@@ -144,6 +145,12 @@ mod app {
         l.app
             .sample_snapshot(l.thermometers, l.counters, &mut records);
 
+        if *l.late {
+            // The previous period overran: this sample was taken late.
+            for r in &mut records {
+                r.status |= status::OVERRUN;
+            }
+        }
         let frame = l.app.frame(
             *l.sequence,
             l.periods.wrapping_mul(u64::from(TICKS_PER_PERIOD)),
@@ -165,7 +172,8 @@ mod app {
         }
 
         l.watchdog.feed();
-        if l.timer.flags().contains(Flag::Update) {
+        *l.late = l.timer.flags().contains(Flag::Update);
+        if *l.late {
             *l.overruns = l.overruns.wrapping_add(1);
             defmt::warn!(
                 "overrun {=u32}: a period took longer than 5 ms",
