@@ -25,6 +25,7 @@ pub mod point;
 pub mod program;
 pub mod rbf;
 pub mod stream;
+mod tag;
 pub mod testing;
 
 pub use blob::{BlobError, ColumnRoles, FeatureRange, Meta, Model, ResidualLevel, SensorKind};
