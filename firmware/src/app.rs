@@ -65,6 +65,8 @@ pub mod status {
     pub const SENSOR_ERROR: u16 = 8;
     /// A thermometer of this channel has returned identical readings for too long.
     pub const STUCK: u16 = 16;
+    /// The model's correction was not finite: raw passed through (core bit).
+    pub const MODEL_FAULT: u16 = 32;
 }
 
 /// One channel of a configuration: which thermometers (by the model's input column names) and which
