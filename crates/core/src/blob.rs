@@ -13,6 +13,7 @@
 //! ordered program), plausibility (see [`crate::bound`]) — and returns the first failure as a
 //! [`BlobError`]; it never panics on any byte string.
 
+use crate::bound::Bound;
 use crate::point::Point;
 use crate::program::{Program, ProgramError};
 use crate::rbf::{Rbf, RbfError};
@@ -155,6 +156,10 @@ pub enum BlobError {
     Program(ProgramError),
     /// The output buffer is too small to encode into.
     BufferTooSmall,
+    /// Every number is valid, but the model's evaluation over its range box could be non-finite, a
+    /// Gaussian could exceed 2^1.5, or the correction exceed 1e12 (see [`crate::bound`]); says
+    /// which field and how.
+    Implausible(&'static str),
 }
 
 impl core::fmt::Display for BlobError {
@@ -178,6 +183,7 @@ impl core::fmt::Display for BlobError {
             Self::Inconsistent(field) => write!(f, "inconsistent field {field}"),
             Self::Program(e) => write!(f, "invalid feature program: {e}"),
             Self::BufferTooSmall => write!(f, "output buffer too small"),
+            Self::Implausible(why) => write!(f, "implausible model: {why}"),
         }
     }
 }
@@ -300,7 +306,14 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
         if !(res.std.is_finite() && res.binned_std.is_finite() && res.bin_s.is_finite()) {
             return Err(BlobError::NonFinite("residual"));
         }
-        Ok(())
+        self.bound().map(|_| ())
+    }
+
+    /// The plausibility bound of [`crate::bound`] over this model's range box: a bound on
+    /// `|correction|` anywhere the compensator evaluates it, or why the model is implausible.
+    /// [`Model::validate`] runs it last, so it may assume valid numbers.
+    pub fn bound(&self) -> Result<Bound, BlobError> {
+        crate::bound::check(&self.rbf, &self.ranges).map_err(BlobError::Implausible)
     }
 
     /// Writes the blob into `buf`, returning its length. Refuses a model that would not decode.
