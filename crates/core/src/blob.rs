@@ -224,20 +224,18 @@ fn map_postcard(e: postcard::Error) -> BlobError {
     }
 }
 
-/// The blob's fields up to the metadata, to say which enum an unknown tag is in.
-#[derive(Deserialize)]
-struct Head<'a> {
-    _magic: [u8; 4],
-    _version: u16,
-    #[serde(borrow)]
-    _meta: Meta<'a>,
-}
-
-/// Where in `body` (a blob without its CRC) the unknown tag `map_postcard` reported is: the two
-/// enums a blob holds are the sensor kind in the metadata and the program's operations.
+/// Where in `body` (a blob without its CRC) the unknown tag `map_postcard` reported is. A blob holds
+/// two enums: the sensor kind, the first field after magic and version, and the program's
+/// operations. Reading that one varint (rather than decoding the metadata again) keeps the firmware's
+/// flash small.
 fn locate_unknown_tag(body: &[u8]) -> BlobError {
-    match postcard::take_from_bytes::<Head<'_>>(body) {
-        Err(postcard::Error::WontImplement) => BlobError::UnknownTag("meta.sensor"),
+    // `Other` is the last variant: a tag past it is unknown.
+    const SENSOR_KINDS: u32 = SensorKind::Other as u32 + 1;
+    let tag = body
+        .get(4..)
+        .and_then(|b| postcard::take_from_bytes::<(u16, u32)>(b).ok());
+    match tag {
+        Some(((_, t), _)) if t >= SENSOR_KINDS => BlobError::UnknownTag("meta.sensor"),
         _ => BlobError::UnknownTag("program.nodes"),
     }
 }

@@ -93,11 +93,11 @@ fn the_correction_limit_is_on_the_bound() {
     let mut m = model();
     m.rbf.centers.clear();
     m.rbf.linear = tcomp_core::point::Point::default();
-    m.rbf.bias = 0.9 * MAX_CORRECTION as f32;
+    m.rbf.bias = 0.9 * MAX_CORRECTION;
     let b = m.bound().unwrap();
     assert!(b.correction >= 0.9 * MAX_CORRECTION && b.correction < MAX_CORRECTION);
-    assert_eq!(b.min_exponent, f64::INFINITY);
-    m.rbf.bias = 1.1 * MAX_CORRECTION as f32;
+    assert_eq!(b.min_exponent, f32::INFINITY);
+    m.rbf.bias = 1.1 * MAX_CORRECTION;
     refused(&m);
 }
 
@@ -114,8 +114,8 @@ fn example_models_pass_and_stay_within_their_bound() {
             assert!(!out.status.contains(Status::MODEL_FAULT));
             largest = largest.max(out.correction.abs());
         }
-        assert!(f64::from(largest) <= b.correction, "{largest} > {b:?}");
+        assert!(largest <= b.correction, "{largest} > {b:?}");
         // Not a vacuous bound either: within a few times the largest value seen.
-        assert!(b.correction < 50.0 * f64::from(largest).max(0.1), "{b:?}");
+        assert!(b.correction < 50.0 * largest.max(0.1), "{b:?}");
     }
 }

@@ -409,8 +409,8 @@ pub fn check_blob(blob: &[u8], samples: &[Sample], points: &[[f32; 16]]) -> Resu
 }
 
 /// `|v| ≤ bound`, false for NaN.
-fn within(v: f32, bound: f64) -> bool {
-    f64::from(v).abs() <= bound
+fn within(v: f32, bound: f32) -> bool {
+    v.abs() <= bound
 }
 
 /// The properties of an accepted model.
