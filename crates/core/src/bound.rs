@@ -217,3 +217,66 @@ pub fn check<const C: usize, const F: usize>(
         min_exponent,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The exact minimum in f64 (the inputs are f32, so this is exact to ~1e-16 relative).
+    fn exact_min(alpha: f32, beta: f32, a: f32, b: f32) -> f64 {
+        let (al, be, a, b) = (
+            f64::from(alpha),
+            f64::from(beta),
+            f64::from(a),
+            f64::from(b),
+        );
+        let f = |t: f64| al * t * t + be * t;
+        let t = -be / (2.0 * al);
+        if al > 0.0 && t >= a && t <= b {
+            f(t)
+        } else {
+            f(a).min(f(b))
+        }
+    }
+
+    fn magnitude() -> impl Strategy<Value = f32> {
+        (-25i32..16, -1.0f32..1.0).prop_map(|(e, m)| m * 10f32.powi(e))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 20_000,
+            max_global_rejects: 200_000,
+            ..ProptestConfig::default()
+        })]
+
+        #[test]
+        fn min_quadratic_is_a_tight_lower_bound(
+            alpha in magnitude().prop_map(f32::abs),
+            beta in magnitude(),
+            a in magnitude(),
+            b in magnitude(),
+        ) {
+            let (a, b) = if a <= b { (a, b) } else { (b, a) };
+            // `check` refuses a center before this could overflow (`A` at its largest ≤ MAX / 2).
+            let m = f64::from(a.abs().max(b.abs()));
+            prop_assume!(f64::from(alpha) * m * m + f64::from(beta.abs()) * m <= f64::from(F32_LIMIT));
+            let got = min_quadratic(alpha, beta, a, b);
+            let exact = exact_min(alpha, beta, a, b);
+            prop_assert!(f64::from(got) <= exact, "{got} > {exact}");
+            // Tight: within a few ε of the terms' largest magnitudes (plus the absolute slack).
+            let scale = f64::from(alpha) * f64::from(a.abs().max(b.abs())).powi(2)
+                + f64::from(beta.abs()) * f64::from(a.abs().max(b.abs()));
+            let slack = 1e-6 * scale + 1e-29;
+            prop_assert!(f64::from(got) >= exact - slack, "{got} ≪ {exact}");
+        }
+    }
+
+    #[test]
+    fn an_empty_side_is_infinite_and_a_zero_alpha_uses_the_ends() {
+        assert_eq!(min_quadratic(1.0, 0.0, 1.0, -1.0), f32::INFINITY);
+        let v = min_quadratic(0.0, 2.0, -3.0, 5.0);
+        assert!(v <= -6.0 && v > -6.0001, "{v}");
+    }
+}
