@@ -59,7 +59,7 @@ pub const MODEL_INTERVAL: u16 = MAX_CHANNELS as u16;
 /// once with their names in [`tcomp_core::frame::status`] (the frame carries this word).
 pub mod status {
     pub use tcomp_core::frame::status::{
-        INPUT_FAULT, NO_MODEL, OK, OUT_OF_RANGE, OVERRUN, SENSOR_ERROR, STUCK,
+        INPUT_FAULT, MODEL_FAULT, NO_MODEL, OK, OUT_OF_RANGE, OVERRUN, SENSOR_ERROR, STUCK,
     };
 }
 

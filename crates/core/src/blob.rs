@@ -4,14 +4,16 @@
 //! ```text
 //! postcard(Model { magic: b"TCMB", version: u16, meta, program, ranges, rbf, residual }) ++ CRC-32 (LE)
 //! ```
-//! The magic is four raw bytes and the version a varint, so both are read before anything else and a
+//! The magic is four raw bytes and the version a varint, so both are read before the structure and a
 //! blob of another version is refused by number, not misread. The CRC-32 (ISO-HDLC, as zip/PNG) covers
 //! every byte before it: any single corrupted byte, and any burst up to 32 bits, is detected.
 //! Strings borrow from the blob (zero-copy), so a model decoded from flash costs RAM only for its
-//! numbers. Decoding checks, in order: length, magic, version, checksum, structure, capacities, values
-//! (finite, positive widths, topologically ordered program) — and returns the first failure as a
+//! numbers. Decoding checks, in order: length, magic, checksum, version, structure (an unknown enum
+//! tag is named, see the `tag` module), capacities, values (finite, positive widths, topologically
+//! ordered program), plausibility (see [`crate::bound`]) — and returns the first failure as a
 //! [`BlobError`]; it never panics on any byte string.
 
+use crate::bound::Bound;
 use crate::point::Point;
 use crate::program::{Program, ProgramError};
 use crate::rbf::{Rbf, RbfError};
@@ -26,6 +28,7 @@ pub const FORMAT_VERSION: u16 = 1;
 
 /// The instrument a model compensates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(remote = "Self")] // serde traits in `crate::tag`: an unknown tag is told apart
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum SensorKind {
     /// Ring laser gyro.
@@ -140,8 +143,11 @@ pub enum BlobError {
     Checksum,
     /// A list or string is longer than this build's capacity.
     CapacityExceeded,
-    /// The bytes do not form a model (bad enum tag, bad UTF-8, bytes left over).
+    /// The bytes do not form a model (bad UTF-8, bad option tag, bytes left over).
     Malformed,
+    /// An enum tag past the enum's variants; names the field. The blob is malformed (or written by
+    /// a build that knows more variants under the same format version).
+    UnknownTag(&'static str),
     /// A number is NaN or infinite; names the field.
     NonFinite(&'static str),
     /// Sizes or values disagree; names the field.
@@ -150,6 +156,10 @@ pub enum BlobError {
     Program(ProgramError),
     /// The output buffer is too small to encode into.
     BufferTooSmall,
+    /// Every number is valid, but the model's evaluation over its range box could be non-finite, a
+    /// Gaussian could exceed 2^1.5, or the correction exceed 1e12 (see [`crate::bound`]); says
+    /// which field and how.
+    Implausible(&'static str),
 }
 
 impl core::fmt::Display for BlobError {
@@ -166,10 +176,14 @@ impl core::fmt::Display for BlobError {
             Self::Checksum => write!(f, "checksum mismatch: the blob is corrupt"),
             Self::CapacityExceeded => write!(f, "a size in the blob exceeds this build's capacity"),
             Self::Malformed => write!(f, "malformed blob content"),
+            Self::UnknownTag(field) => {
+                write!(f, "malformed blob content: unknown enum tag in {field}")
+            }
             Self::NonFinite(field) => write!(f, "non-finite number in {field}"),
             Self::Inconsistent(field) => write!(f, "inconsistent field {field}"),
             Self::Program(e) => write!(f, "invalid feature program: {e}"),
             Self::BufferTooSmall => write!(f, "output buffer too small"),
+            Self::Implausible(why) => write!(f, "implausible model: {why}"),
         }
     }
 }
@@ -201,10 +215,28 @@ impl From<RbfError> for BlobError {
 fn map_postcard(e: postcard::Error) -> BlobError {
     match e {
         postcard::Error::DeserializeUnexpectedEnd => BlobError::Truncated,
-        // heapless reports a sequence or string longer than its capacity through serde's custom error.
+        // heapless (and `Point`) report a sequence longer than its capacity through serde's custom
+        // error; unknown enum tags, which would arrive the same way, are diverted by the `tag` module.
         postcard::Error::SerdeDeCustom => BlobError::CapacityExceeded,
+        postcard::Error::WontImplement => BlobError::UnknownTag("the model"),
         postcard::Error::SerializeBufferFull => BlobError::BufferTooSmall,
         _ => BlobError::Malformed,
+    }
+}
+
+/// Where in `body` (a blob without its CRC) the unknown tag `map_postcard` reported is. A blob holds
+/// two enums: the sensor kind, the first field after magic and version, and the program's
+/// operations. Reading that one varint (rather than decoding the metadata again) keeps the firmware's
+/// flash small.
+fn locate_unknown_tag(body: &[u8]) -> BlobError {
+    // `Other` is the last variant: a tag past it is unknown.
+    const SENSOR_KINDS: u32 = SensorKind::Other as u32 + 1;
+    let tag = body
+        .get(4..)
+        .and_then(|b| postcard::take_from_bytes::<(u16, u32)>(b).ok());
+    match tag {
+        Some(((_, t), _)) if t >= SENSOR_KINDS => BlobError::UnknownTag("meta.sensor"),
+        _ => BlobError::UnknownTag("program.nodes"),
     }
 }
 
@@ -272,7 +304,14 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
         if !(res.std.is_finite() && res.binned_std.is_finite() && res.bin_s.is_finite()) {
             return Err(BlobError::NonFinite("residual"));
         }
-        Ok(())
+        self.bound().map(|_| ())
+    }
+
+    /// The plausibility bound of [`crate::bound`] over this model's range box: a bound on
+    /// `|correction|` anywhere the compensator evaluates it, or why the model is implausible.
+    /// [`Model::validate`] runs it last, so it may assume valid numbers.
+    pub fn bound(&self) -> Result<Bound, BlobError> {
+        crate::bound::check(&self.rbf, &self.ranges).map_err(BlobError::Implausible)
     }
 
     /// Writes the blob into `buf`, returning its length. Refuses a model that would not decode.
@@ -288,18 +327,17 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
     }
 
     /// Decodes and validates a blob. Never panics, whatever the bytes.
+    ///
+    /// The CRC is checked before the version: a corrupted version byte is corruption, and only an
+    /// intact blob of another format is reported as [`BlobError::UnsupportedVersion`].
     pub fn decode(bytes: &'a [u8]) -> Result<Self, BlobError> {
         let magic = bytes.get(..4).ok_or(BlobError::Truncated)?;
         if magic != MAGIC {
             return Err(BlobError::BadMagic);
         }
-        let after_magic = bytes.get(4..).ok_or(BlobError::Truncated)?;
-        let (version, _) = postcard::take_from_bytes::<u16>(after_magic).map_err(|e| match e {
-            postcard::Error::DeserializeUnexpectedEnd => BlobError::Truncated,
-            _ => BlobError::Malformed,
-        })?;
-        if version != FORMAT_VERSION {
-            return Err(BlobError::UnsupportedVersion(version));
+        // Magic, a version varint (at least one byte) and the CRC.
+        if bytes.len() < 4 + 1 + 4 {
+            return Err(BlobError::Truncated);
         }
         let body_len = bytes.len().checked_sub(4).ok_or(BlobError::Truncated)?;
         let (body, crc_bytes) = bytes
@@ -310,7 +348,18 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
         if crc32(body) != u32::from_le_bytes(crc) {
             return Err(BlobError::Checksum);
         }
-        let (model, rest) = postcard::take_from_bytes::<Self>(body).map_err(map_postcard)?;
+        let after_magic = body.get(4..).ok_or(BlobError::Truncated)?;
+        let (version, _) = postcard::take_from_bytes::<u16>(after_magic).map_err(|e| match e {
+            postcard::Error::DeserializeUnexpectedEnd => BlobError::Truncated,
+            _ => BlobError::Malformed,
+        })?;
+        if version != FORMAT_VERSION {
+            return Err(BlobError::UnsupportedVersion(version));
+        }
+        let (model, rest) = postcard::take_from_bytes::<Self>(body).map_err(|e| match e {
+            postcard::Error::WontImplement => locate_unknown_tag(body),
+            e => map_postcard(e),
+        })?;
         if !rest.is_empty() {
             return Err(BlobError::Malformed);
         }

@@ -12,7 +12,11 @@
 //!   it clamped to that range (they were fitted only inside it), while the linear term sees it clamped
 //!   to the range widened by one span on each side, so a trend keeps extrapolating somewhat beyond
 //!   the trained envelope (what the linear term is for) but never without bound;
-//! * no model: the raw value passes through, flagged [`Status::NO_MODEL`].
+//! * no model: the raw value passes through, flagged [`Status::NO_MODEL`];
+//! * a correction that is not finite, or a `raw − correction` that overflows, for a finite raw value:
+//!   the raw value passes through, flagged [`Status::MODEL_FAULT`]. A decoded model cannot do this
+//!   inside its range box (see [`crate::bound`]); the check makes "never NaN with status OK" hold
+//!   whatever the model.
 //!
 //! A channel may refresh its correction less often than it samples
 //! ([`Channel::with_model_interval`]): thermal features move on time scales of seconds to hours, so
@@ -38,6 +42,9 @@ impl Status {
     pub const OUT_OF_RANGE: Status = Status(2);
     /// An input was NaN/infinite (or the raw value was): last good features held.
     pub const INPUT_FAULT: Status = Status(4);
+    /// The model's correction (or `raw − correction`) was not finite for a finite raw value: the raw
+    /// value is passed through. Bits 8 and 16 are the firmware's own flags, hence 32.
+    pub const MODEL_FAULT: Status = Status(32);
 
     /// True when no flag is set.
     pub fn is_ok(self) -> bool {
@@ -65,6 +72,7 @@ impl core::fmt::Display for Status {
             (Status::NO_MODEL, "no-model"),
             (Status::OUT_OF_RANGE, "out-of-range"),
             (Status::INPUT_FAULT, "input-fault"),
+            (Status::MODEL_FAULT, "model-fault"),
         ];
         let mut first = true;
         for (flag, name) in names {
@@ -227,8 +235,18 @@ impl<const N: usize, const F: usize> Channel<N, F> {
                 c
             }
         };
+        let compensated = raw - correction;
+        // One check per sample: a finite raw value never leaves as NaN or ±inf. Decoding refuses a
+        // model whose correction could overflow in its range box, so this is the last line.
+        if !compensated.is_finite() && raw.is_finite() {
+            return Output {
+                compensated: raw,
+                correction: 0.0,
+                status: status.with(Status::MODEL_FAULT),
+            };
+        }
         Output {
-            compensated: raw - correction,
+            compensated,
             correction,
             status,
         }

@@ -89,16 +89,19 @@ pub mod status {
     pub const SENSOR_ERROR: u16 = 8;
     /// A thermometer of this channel has returned identical readings for too long (loop bit).
     pub const STUCK: u16 = 16;
+    /// The model's correction was not finite: raw passed through (core bit).
+    pub const MODEL_FAULT: u16 = Status::MODEL_FAULT.0 as u16;
     /// The sample task overran its period: this sample was late (board bit, on every channel of the
     /// frame). Board bits are taken from bit 15 down, the core's and the loop's from bit 0 up.
     pub const OVERRUN: u16 = 1 << 15;
     /// Every named bit with its name, lowest bit first.
-    pub const NAMES: [(u16, &str); 6] = [
+    pub const NAMES: [(u16, &str); 7] = [
         (NO_MODEL, "no-model"),
         (OUT_OF_RANGE, "out-of-range"),
         (INPUT_FAULT, "input-fault"),
         (SENSOR_ERROR, "sensor-error"),
         (STUCK, "stuck"),
+        (MODEL_FAULT, "model-fault"),
         (OVERRUN, "overrun"),
     ];
 

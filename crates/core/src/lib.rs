@@ -9,7 +9,8 @@
 //! * [`rbf`] — the Gaussian RBF evaluator with per-feature normalisation, per-center widths, an optional
 //!   linear term, and the fast exponential of [`fastexp`].
 //! * [`blob`] — the model blob: one serde type, postcard-encoded, with magic, version and CRC-32;
-//!   decoding any byte string yields a `Result`, never a panic.
+//!   decoding any byte string yields a `Result`, never a panic; [`bound`] refuses a model whose
+//!   evaluation could be non-finite or implausibly large anywhere in its range box.
 //! * [`compensator`] — the immutable model apart from the per-channel streaming state:
 //!   `step(inputs, raw) → (compensated, status)`.
 //!
@@ -20,6 +21,7 @@
 #![no_std]
 
 pub mod blob;
+pub mod bound;
 pub mod compensator;
 pub mod fastexp;
 pub mod frame;
@@ -29,6 +31,7 @@ pub mod point;
 pub mod program;
 pub mod rbf;
 pub mod stream;
+mod tag;
 pub mod testing;
 
 pub use blob::{BlobError, ColumnRoles, FeatureRange, Meta, Model, ResidualLevel, SensorKind};

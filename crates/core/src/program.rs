@@ -31,6 +31,7 @@ pub const DEFAULT_RATE_WINDOW_S: f32 = 60.0;
 
 /// One operation of a feature program; operands are indices of earlier nodes.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(remote = "Self")] // serde traits in `crate::tag`: an unknown tag is told apart
 pub enum Op {
     /// Input column by index into [`Program::inputs`].
     Input(u8),

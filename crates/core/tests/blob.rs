@@ -8,6 +8,13 @@ use tcomp_core::{BlobError, Model};
 
 type HostModel<'a> = Model<'a, 64, 8, 48>;
 
+/// Rewrites the trailing CRC of `blob` so that it matches the content again.
+fn reseal(blob: &mut [u8]) {
+    let n = blob.len() - 4;
+    let crc = tcomp_core::blob::crc32(&blob[..n]);
+    blob[n..].copy_from_slice(&crc.to_le_bytes());
+}
+
 fn encoded(n_centers: usize, seed: u32) -> Vec<u8> {
     let m = example_model::<64, 8, 48>(n_centers, seed);
     let mut buf = vec![0u8; 8192];
@@ -24,12 +31,18 @@ fn reasons_are_specific() {
         HostModel::decode(b"NOPE....").unwrap_err(),
         BlobError::BadMagic
     );
+    // An intact blob of another format version (valid CRC) is refused by its number…
     let mut v2 = good.clone();
     v2[4] = FORMAT_VERSION as u8 + 1;
+    reseal(&mut v2);
     assert_eq!(
         HostModel::decode(&v2).unwrap_err(),
         BlobError::UnsupportedVersion(FORMAT_VERSION + 1)
     );
+    // …while a version byte changed by corruption (CRC no longer matches) is corruption.
+    let mut hit = good.clone();
+    hit[4] = FORMAT_VERSION as u8 + 1;
+    assert_eq!(HostModel::decode(&hit).unwrap_err(), BlobError::Checksum);
     let mut flipped = good.clone();
     let mid = flipped.len() / 2;
     flipped[mid] ^= 0x10;
@@ -147,4 +160,148 @@ fn crc32_is_the_standard_iso_hdlc() {
     // The check value of CRC-32/ISO-HDLC (zip, PNG) for "123456789".
     assert_eq!(tcomp_core::blob::crc32(b"123456789"), 0xCBF4_3926);
     assert_eq!(tcomp_core::blob::crc32(b""), 0);
+}
+
+/// Postcard length of `v` (the wire format is the concatenation of the fields).
+fn wire_len<T: serde::Serialize>(v: &T) -> usize {
+    let mut buf = vec![0u8; 8192];
+    postcard::to_slice(v, &mut buf).unwrap().len()
+}
+
+#[test]
+fn unknown_enum_tags_are_malformed_and_named_not_capacity() {
+    let m = example_model::<64, 8, 48>(8, 21);
+    let good = encoded(8, 21);
+    // The sensor kind is the first field after magic and version: tag 0 (RLG) of 6 variants.
+    assert_eq!(good[5], 0);
+    for tag in [6u8, 0x7F] {
+        let mut bad = good.clone();
+        bad[5] = tag;
+        reseal(&mut bad);
+        let e = HostModel::decode(&bad).unwrap_err();
+        assert_eq!(e, BlobError::UnknownTag("meta.sensor"), "tag {tag}");
+        assert_eq!(
+            e.to_string(),
+            "malformed blob content: unknown enum tag in meta.sensor"
+        );
+    }
+    // The first operation's tag: after magic, version, meta, inputs, signals and the node count.
+    let at = 5 + wire_len(&m.meta) + wire_len(&m.program.inputs) + wire_len(&m.program.signals) + 1;
+    assert_eq!(good[at], 0, "the first node reads an input (tag 0)");
+    for tag in [13u8, 0x7F] {
+        let mut bad = good.clone();
+        bad[at] = tag;
+        reseal(&mut bad);
+        let e = HostModel::decode(&bad).unwrap_err();
+        assert_eq!(e, BlobError::UnknownTag("program.nodes"), "tag {tag}");
+        assert_eq!(
+            e.to_string(),
+            "malformed blob content: unknown enum tag in program.nodes"
+        );
+    }
+    // The last valid tags still decode as far as the structure goes (the values may then be refused).
+    let mut last = good.clone();
+    last[5] = 5;
+    reseal(&mut last);
+    assert_eq!(
+        HostModel::decode(&last).unwrap().meta.sensor,
+        tcomp_core::SensorKind::Other
+    );
+}
+
+#[test]
+fn every_reason_has_its_message() {
+    let cases = [
+        (BlobError::Truncated, "truncated blob"),
+        (BlobError::BadMagic, "not a tcomp model blob (bad magic)"),
+        (
+            BlobError::UnsupportedVersion(7),
+            "unsupported blob format version 7 (this build reads 1)",
+        ),
+        (
+            BlobError::Checksum,
+            "checksum mismatch: the blob is corrupt",
+        ),
+        (
+            BlobError::CapacityExceeded,
+            "a size in the blob exceeds this build's capacity",
+        ),
+    ];
+    for (e, msg) in cases {
+        assert_eq!(e.to_string(), msg);
+    }
+    let good = encoded(4, 9);
+    let mut v9 = good.clone();
+    v9[4] = 9;
+    reseal(&mut v9);
+    assert_eq!(
+        HostModel::decode(&v9).unwrap_err().to_string(),
+        "unsupported blob format version 9 (this build reads 1)"
+    );
+    v9[4] = 1;
+    assert_eq!(
+        HostModel::decode(&v9).unwrap_err().to_string(),
+        "checksum mismatch: the blob is corrupt"
+    );
+}
+
+#[test]
+fn serde_of_the_guarded_enums_round_trips_every_variant() {
+    use tcomp_core::{Op, SensorKind};
+    let kinds = [
+        SensorKind::Rlg,
+        SensorKind::Qma,
+        SensorKind::Ifog,
+        SensorKind::MemsGyro,
+        SensorKind::MemsAccel,
+        SensorKind::Other,
+    ];
+    for (i, k) in kinds.iter().enumerate() {
+        let mut buf = [0u8; 16];
+        let bytes = postcard::to_slice(k, &mut buf).unwrap();
+        assert_eq!(bytes, &[i as u8], "tag of {k:?}");
+        assert_eq!(postcard::from_bytes::<SensorKind>(bytes).unwrap(), *k);
+    }
+    let ops = [
+        Op::Input(1),
+        Op::Const(2.5),
+        Op::Add(0, 1),
+        Op::Sub(0, 1),
+        Op::Mul(0, 1),
+        Op::Div(0, 1),
+        Op::Neg(2),
+        Op::Sq(2),
+        Op::Abs(2),
+        Op::Clamp {
+            x: 1,
+            lo: -1.0,
+            hi: 1.0,
+        },
+        Op::Rate {
+            x: 1,
+            slot: 0,
+            window_s: 60.0,
+        },
+        Op::Lag {
+            x: 1,
+            slot: 1,
+            tau_s: 30.0,
+        },
+        Op::Hyst {
+            x: 1,
+            slot: 2,
+            threshold: 0.05,
+        },
+    ];
+    for (i, op) in ops.iter().enumerate() {
+        let mut buf = [0u8; 32];
+        let bytes = postcard::to_slice(op, &mut buf).unwrap();
+        assert_eq!(bytes[0], i as u8, "tag of {op:?}");
+        assert_eq!(postcard::from_bytes::<Op>(bytes).unwrap(), *op);
+    }
+    // An unknown tag on its own gives postcard's marker, never the capacity error.
+    assert_eq!(
+        postcard::from_bytes::<Op>(&[13, 0]).unwrap_err(),
+        postcard::Error::WontImplement
+    );
 }

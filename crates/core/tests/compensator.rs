@@ -143,3 +143,43 @@ fn model_interval_refreshes_on_its_phase_and_holds_in_between() {
         "reset keeps the interval, starts fresh"
     );
 }
+
+#[test]
+fn a_non_finite_correction_is_a_model_fault_and_raw_passes() {
+    // Built directly (decoding would refuse it): every weight 3e38, so the sum overflows to ±inf.
+    let mut m = model();
+    for c in m.rbf.centers.iter_mut() {
+        c.w = 3.0e38;
+    }
+    let mut ch = Channel::<24, 4>::new(0.01);
+    let (temps, raw) = example_sample(0, 0.01);
+    let out = ch.step(Some(&m), &temps, raw);
+    assert!(!m.rbf.eval(ch.features()).is_finite(), "the sum overflows");
+    assert_eq!(out.status, Status::MODEL_FAULT);
+    assert_eq!((out.compensated, out.correction), (raw, 0.0));
+    assert_eq!(format!("{}", out.status), "model-fault");
+    // A NaN raw value is the input's fault, not the model's.
+    let out = ch.step(Some(&m), &temps, f32::NAN);
+    assert!(out.status.contains(Status::INPUT_FAULT));
+    assert!(!out.status.contains(Status::MODEL_FAULT));
+}
+
+#[test]
+fn an_overflowing_difference_is_a_model_fault() {
+    // A finite correction, a finite raw value, but raw − correction overflows.
+    let mut m = model();
+    m.rbf.bias = -3.0e38;
+    m.rbf.linear = tcomp_core::point::Point([0.0; 4]);
+    for c in m.rbf.centers.iter_mut() {
+        c.w = 0.0;
+    }
+    let mut ch = Channel::<24, 4>::new(0.01);
+    let (temps, _) = example_sample(0, 0.01);
+    let out = ch.step(Some(&m), &temps, 3.0e38);
+    assert_eq!(out.status, Status::MODEL_FAULT);
+    assert_eq!(out.compensated, 3.0e38);
+    // The same model with an ordinary raw value is fine.
+    let out = ch.step(Some(&m), &temps, 1.0);
+    assert_eq!(out.status, Status::OK);
+    assert_eq!(out.compensated, 1.0 + 3.0e38);
+}

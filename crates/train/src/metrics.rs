@@ -65,7 +65,7 @@ pub struct Run {
     pub temperature: Vec<f64>,
     /// Samples flagged out of the trained range.
     pub out_of_range: usize,
-    /// Samples flagged as input faults.
+    /// Samples flagged as input or model faults.
     pub faults: usize,
     /// Gaps across which the channel was reset.
     pub gaps: usize,
@@ -149,7 +149,7 @@ pub fn run_at_capacity<const C2: usize, const F2: usize, const N2: usize>(
         if out.status.contains(Status::OUT_OF_RANGE) {
             run.out_of_range += 1;
         }
-        if out.status.contains(Status::INPUT_FAULT) {
+        if out.status.contains(Status::INPUT_FAULT) || out.status.contains(Status::MODEL_FAULT) {
             run.faults += 1;
         }
         run.error.push(raw - r);
@@ -238,7 +238,7 @@ pub struct EvalReport {
     pub segments: Vec<SegmentStats>,
     /// Percentage of samples flagged out of the trained range.
     pub out_of_range_pct: f64,
-    /// Samples flagged as input faults.
+    /// Samples flagged as input faults (and model faults: a non-finite correction).
     pub input_faults: usize,
     /// Gaps where the channel was reset.
     pub gaps: usize,
