@@ -5,8 +5,8 @@
 //! `RUST_BACKTRACE=1` set. It asserts the exit code (1 for a failed run, 2 for bad usage), that stderr
 //! names the place (`file:line:col`, the option, or the field) and holds no backtrace, and that the
 //! directory is exactly as it was: every file's bytes unchanged and nothing added (no output, no
-//! temporary file). Rows whose fix belongs to the core/trainer hardening branch are written to the
-//! behaviour asked for and gathered in [`pending`], run by an ignored test until that branch is in.
+//! temporary file). [`hardened`] holds the rows fixed in the core and the trainer (CSV reader, option
+//! ranges, the parser, model plausibility); they run with the rest.
 //!
 //! Below the catalogue: one test per command that an existing output survives every failing run,
 //! and that `inspect` never prints a blob's control characters.
@@ -116,7 +116,8 @@ fn model_blob() -> &'static [u8] {
     })
 }
 
-/// The good blob with its coefficients changed by `f`, re-encoded with a valid checksum.
+/// The good blob with its coefficients changed by `f`, re-encoded with a valid checksum (by hand:
+/// `Model::encode` itself refuses an implausible model).
 fn doctored(
     f: impl Fn(&mut tcomp_core::Rbf<{ tcomp_core::HOST_CENTERS }, { tcomp_core::HOST_FEATURES }>),
 ) -> Vec<u8> {
@@ -124,8 +125,10 @@ fn doctored(
     let mut m = tcomp_train::blob_io::decode(Path::new("m.tcm"), bytes).unwrap();
     f(&mut m.rbf);
     let mut buf = vec![0u8; 64 * 1024];
-    let n = m.encode(&mut buf).unwrap();
+    let n = postcard::to_slice(&m, &mut buf).unwrap().len();
     buf.truncate(n);
+    let crc = tcomp_core::blob::crc32(&buf);
+    buf.extend_from_slice(&crc.to_le_bytes());
     buf
 }
 
@@ -410,9 +413,9 @@ fn catalogue() -> Vec<Case> {
     ]
 }
 
-/// Rows whose fix is on the core/trainer hardening branch.
+/// Rows fixed in the core and the trainer: the CSV reader, option ranges, the parser, model plausibility.
 #[rustfmt::skip]
-fn pending() -> Vec<Case> {
+fn hardened() -> Vec<Case> {
     let huge = doctored(|r| {
         let nf = usize::from(r.n_features);
         for c in r.centers.iter_mut() {
@@ -442,23 +445,12 @@ fn pending() -> Vec<Case> {
 
 #[test]
 fn every_catalogued_bad_input_fails_cleanly_and_names_the_place() {
-    let rows = catalogue();
+    let mut rows = catalogue();
+    rows.extend(hardened());
     assert!(rows.len() >= 60, "{} rows", rows.len());
     for c in &rows {
         run_case(c);
     }
-}
-
-/// Runs every pending row and lists all that fail (each row's own message is printed above).
-#[test]
-#[ignore = "needs the core/trainer hardening branch"]
-fn catalogued_bad_inputs_fixed_by_the_hardening_branch() {
-    let failing: Vec<&str> = pending()
-        .iter()
-        .filter(|c| std::panic::catch_unwind(|| run_case(c)).is_err())
-        .map(|c| c.name)
-        .collect();
-    assert!(failing.is_empty(), "still failing: {failing:#?}");
 }
 
 /// Runs every failing run of `runs` in one standard directory holding `extra` files too: after each,
