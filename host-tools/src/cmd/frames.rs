@@ -110,9 +110,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "stats": stats_json(&stats),
             "frames": list,
         });
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        outln!("{}", serde_json::to_string_pretty(&value)?);
     } else {
-        print!("{}", csv(&frames));
+        out!("{}", csv(&frames));
         eprintln!(
             "{} frames, {} lost (sequence gaps), {} corrupt (CRC), {} bytes skipped, {} restarts",
             stats.frames, stats.lost, stats.corrupt, stats.skipped, stats.restarts

@@ -60,11 +60,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 .iter()
                 .map(|p| serde_json::json!({"name": p.name, "description": p.description}))
                 .collect();
-            println!("{}", serde_json::to_string_pretty(&list)?);
+            outln!("{}", serde_json::to_string_pretty(&list)?);
         } else {
-            println!("Presets (tcomp simulate --preset NAME --out DIR):");
+            outln!("Presets (tcomp simulate --preset NAME --out DIR):");
             for p in presets::list() {
-                println!("  {:<12} {}", p.name, p.description);
+                outln!("  {:<12} {}", p.name, p.description);
             }
         }
         return Ok(());
@@ -117,11 +117,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "effects": truth.effects.iter().map(|e| e.name.clone()).collect::<Vec<_>>(),
             "true_features": truth.true_features,
         });
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+        outln!("{}", serde_json::to_string_pretty(&summary)?);
         return Ok(());
     }
     let t = &truth.train;
-    println!(
+    outln!(
         "{} ({}): {} Hz internal, {} s rows, seeds {} / {}",
         truth.name,
         t.sensor.name(),
@@ -132,7 +132,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     );
     for (role, run) in [("train", &truth.train), ("verify", &truth.verify)] {
         let file = truth.files.get(role).cloned().unwrap_or_default();
-        println!(
+        outln!(
             "  wrote {:<40} {:>9} rows  bias std {:.4} {u}  noise std {:.4} raw, {:.4} (100 s bins) {u}",
             out.join(&file).display().to_string(),
             run.rows,
@@ -142,9 +142,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             u = run.unit
         );
     }
-    println!("  wrote {}", out.join("truth.json").display());
+    outln!("  wrote {}", out.join("truth.json").display());
     let names: Vec<&str> = truth.effects.iter().map(|e| e.name.as_str()).collect();
-    println!(
+    outln!(
         "  effects: {}",
         if names.is_empty() {
             "none".to_string()
@@ -153,13 +153,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
     );
     for (name, def) in &truth.true_features.signals {
-        println!("  signal:  {name} = {def}");
+        outln!("  signal:  {name} = {def}");
     }
-    println!(
+    outln!(
         "  true features: {}",
         truth.true_features.features.join("; ")
     );
-    println!(
+    outln!(
         "  columns: {} (error = {} - {})",
         t.columns.all.join(","),
         t.columns.target,
