@@ -18,9 +18,13 @@ fn main() {
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     let root =
         PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
-    let memory_x = root.join("../memory.x");
+    let memory_x = root.join("memory.x");
     fs::copy(&memory_x, out.join("memory.x")).expect("copy memory.x");
-    println!("cargo:rustc-link-search={}", out.display());
+    // For this crate's binaries only: a `rustc-link-search` would reach every crate that links the
+    // library (a board crate with its own `memory.x`), and the first `memory.x` found wins. For the
+    // same reason no `memory.x` lies in the workspace root: the linker runs there and looks in its
+    // working directory first.
+    println!("cargo:rustc-link-arg-bins=-L{}", out.display());
     println!("cargo:rerun-if-changed={}", memory_x.display());
     println!("cargo:rerun-if-changed=build.rs");
     if env::var("TARGET").is_ok_and(|t| t.starts_with("thumb")) {

@@ -12,15 +12,19 @@
 //!   [`status::SENSOR_ERROR`];
 //! * a thermometer returning the very same bits for [`STUCK_SAMPLES`] samples flags
 //!   [`status::STUCK`] (a 24-bit ADC on a live sensor never does);
-//! * a counter read that fails gives a NaN raw value (flagged); the pulses are not lost, the next good
-//!   read covers the missed periods and is divided by their total length;
+//! * a counter read that fails on the bus gives a NaN raw value (flagged); the pulses are not lost,
+//!   the next good read covers the missed periods and is divided by their total length;
+//! * a counter interval the hardware flags (pulses lost, instrument or clock fault) was consumed: that
+//!   sample's raw value is NaN with [`status::SENSOR_ERROR`], and the next interval is one period
+//!   again ([`tcomp_hal::Interval`] tells the two apart);
 //! * a channel whose blob is missing, corrupt or reads inputs it is not wired to runs with
 //!   `NO_MODEL`: raw value passed through, flagged.
 
 use crate::image::{Image, ImageError};
+use tcomp_core::frame::{ChannelOutput, Frame, MAX_CHANNELS as FRAME_CHANNELS};
 use tcomp_core::{BlobError, Channel, MAX_INPUTS, Model};
 use tcomp_hal::scale::ChannelScale;
-use tcomp_hal::{PulseCounter, Thermometer};
+use tcomp_hal::{CounterSnapshot, ErrorKind, Interval, PulseCounter, Thermometer};
 
 /// Centers per model in the firmware (the core's [`tcomp_core::FLIGHT_CENTERS`], which the host
 /// tools check blobs against).
@@ -51,20 +55,12 @@ pub const MAX_CHANNELS: usize = 6;
 /// sample (see BENCHMARKS.md for both instruction counts).
 pub const MODEL_INTERVAL: u16 = MAX_CHANNELS as u16;
 
-/// The status word of one output: the core's [`tcomp_core::Status`] bits plus the loop's own.
+/// The status word of one output: the core's [`tcomp_core::Status`] bits plus the loop's own, defined
+/// once with their names in [`tcomp_core::frame::status`] (the frame carries this word).
 pub mod status {
-    /// Model present, inputs good and in range.
-    pub const OK: u16 = 0;
-    /// No valid model: raw passed through (core bit).
-    pub const NO_MODEL: u16 = 1;
-    /// A feature outside its trained range, clamped (core bit).
-    pub const OUT_OF_RANGE: u16 = 2;
-    /// A NaN/infinite input or raw value: last good features held (core bit).
-    pub const INPUT_FAULT: u16 = 4;
-    /// A thermometer or counter read of this channel returned an error.
-    pub const SENSOR_ERROR: u16 = 8;
-    /// A thermometer of this channel has returned identical readings for too long.
-    pub const STUCK: u16 = 16;
+    pub use tcomp_core::frame::status::{
+        INPUT_FAULT, NO_MODEL, OK, OUT_OF_RANGE, OVERRUN, SENSOR_ERROR, STUCK,
+    };
 }
 
 /// One channel of a configuration: which thermometers (by the model's input column names) and which
@@ -173,6 +169,12 @@ pub struct Record {
     pub compensated: f32,
     /// [`status`] bits.
     pub status: u16,
+    /// The model's correction that was subtracted (0 without a model).
+    pub correction: f32,
+    /// The exact pulse count of the interval …
+    pub counts: i32,
+    /// … and its length in loop periods (0: no valid count this sample).
+    pub periods: u16,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -262,14 +264,42 @@ impl<'a> App<'a> {
         self.config
     }
 
-    /// One period: read all sensors, step all channels, write one record per channel into `out`
-    /// (as many as both have).
+    /// One period with one [`PulseCounter`] per counter: read all sensors, step all channels, write
+    /// one record per channel into `out` (as many as both have). Each counter error is classified by
+    /// its kind ([`Interval::from_result`]): a flagged interval was consumed, a bus error was not.
     pub fn sample<T: Thermometer, P: PulseCounter>(
         &mut self,
         thermometers: &mut [T],
         counters: &mut [P],
         out: &mut [Record],
     ) {
+        self.read_thermometers(thermometers);
+        let mut intervals = [Interval::Unread(ErrorKind::NotReady); MAX_COUNTERS];
+        for (c, i) in counters.iter_mut().zip(intervals.iter_mut()) {
+            *i = Interval::from_result(c.read_delta());
+        }
+        let n = counters.len().min(MAX_COUNTERS);
+        self.step_all(intervals.get(..n).unwrap_or(&[]), out);
+    }
+
+    /// One period with a counter block latched once for all channels ([`CounterSnapshot`]: one SPI
+    /// frame, every instrument at the same instant): read all sensors, step all channels, write one
+    /// record per channel into `out` (as many as both have). Counter `i` of the configuration is
+    /// channel `i` of the block. The counters are latched first, a fixed latency after the timer
+    /// edge that started the period, and the thermometers read after.
+    pub fn sample_snapshot<T: Thermometer, C: CounterSnapshot>(
+        &mut self,
+        thermometers: &mut [T],
+        counters: &mut C,
+        out: &mut [Record],
+    ) {
+        let mut intervals = [Interval::Unread(ErrorKind::NotReady); MAX_COUNTERS];
+        counters.read_snapshot(&mut intervals);
+        self.read_thermometers(thermometers);
+        self.step_all(&intervals, out);
+    }
+
+    fn read_thermometers<T: Thermometer>(&mut self, thermometers: &mut [T]) {
         for (t, s) in thermometers.iter_mut().zip(self.therms.iter_mut()) {
             match t.read_celsius() {
                 Ok(v) => {
@@ -292,15 +322,23 @@ impl<'a> App<'a> {
                 }
             }
         }
-        // Counts and the interval they cover (longer after failed reads); `None` on a failed read.
+    }
+
+    /// Turns each counter's interval into counts and the time they cover, then steps every channel.
+    fn step_all(&mut self, intervals: &[Interval], out: &mut [Record]) {
+        // Counts and the interval they cover (longer after unread intervals); `None` when there is
+        // no valid count this period.
         let mut pulses = [None; MAX_COUNTERS];
-        for ((c, p), missed) in counters.iter_mut().zip(&mut pulses).zip(&mut self.missed) {
-            match c.read_delta() {
-                Ok(counts) => {
-                    *p = Some((counts, PERIOD_S * f32::from(missed.saturating_add(1))));
+        for ((i, p), missed) in intervals.iter().zip(&mut pulses).zip(&mut self.missed) {
+            match *i {
+                Interval::Counted(counts) => {
+                    *p = Some((counts, missed.saturating_add(1)));
                     *missed = 0;
                 }
-                Err(_) => *missed = missed.saturating_add(1),
+                // Consumed: those pulses are gone, the next interval is one period.
+                Interval::Flagged(_) => *missed = 0,
+                // Still in the counter: the next good read covers this period too.
+                Interval::Unread(_) => *missed = missed.saturating_add(1),
             }
         }
         for (k, rec) in out.iter_mut().take(self.config.len()).enumerate() {
@@ -308,7 +346,7 @@ impl<'a> App<'a> {
         }
     }
 
-    fn step_channel(&mut self, k: usize, pulses: &[Option<(i32, f32)>; MAX_COUNTERS]) -> Record {
+    fn step_channel(&mut self, k: usize, pulses: &[Option<(i32, u16)>; MAX_COUNTERS]) -> Record {
         let (Some(cfg), Some(channel), Some(map), Some(n)) = (
             self.config.get(k),
             self.channels.get_mut(k),
@@ -318,13 +356,18 @@ impl<'a> App<'a> {
             return Record::default();
         };
         let mut flags = 0u16;
-        let raw = match pulses.get(usize::from(cfg.counter)).copied().flatten() {
-            Some((counts, dt)) => cfg.scale.rate(counts, dt).unwrap_or(f32::NAN),
+        let pulses = pulses.get(usize::from(cfg.counter)).copied().flatten();
+        let raw = match pulses {
+            Some((counts, periods)) => cfg
+                .scale
+                .rate(counts, PERIOD_S * f32::from(periods))
+                .unwrap_or(f32::NAN),
             None => {
                 flags |= status::SENSOR_ERROR;
                 f32::NAN
             }
         };
+        let (counts, periods) = pulses.unwrap_or((0, 0));
         for &(_, t) in cfg.thermometers {
             if let Some(s) = self.therms.get(usize::from(t)) {
                 if s.error {
@@ -348,6 +391,51 @@ impl<'a> App<'a> {
         Record {
             compensated: o.compensated,
             status: u16::from(o.status.0) | flags,
+            correction: o.correction,
+            counts,
+            periods,
         }
     }
+
+    /// The output frame of one sample: `records` (as [`sample`](Self::sample) wrote them, one per
+    /// channel of the configuration) as [`precise_value`](Self::precise_value)s with their status
+    /// words, stamped with `sequence` and `timestamp` ticks of `tick_hz`. Encode it with
+    /// [`Frame::encode`].
+    pub fn frame(&self, sequence: u32, timestamp: u64, tick_hz: u32, records: &[Record]) -> Frame {
+        let mut outputs = [ChannelOutput::default(); FRAME_CHANNELS];
+        let n = self.config.len().min(records.len()).min(FRAME_CHANNELS);
+        for (k, (o, rec)) in outputs.iter_mut().zip(records).take(n).enumerate() {
+            *o = ChannelOutput {
+                value: self.precise_value(k, rec),
+                status: rec.status,
+            };
+        }
+        Frame::new(
+            sequence,
+            timestamp,
+            tick_hz,
+            outputs.get(..n).unwrap_or(&[]),
+        )
+    }
+
+    /// Channel `k`'s output at the sensor's full resolution, for the output frame:
+    /// `counts · per_pulse / interval − correction` in f64 from the record's exact pulse count (the
+    /// f32 [`Record::compensated`] steps by 0.031 °/h at 360,000 °/h; this by 10⁻¹⁰). NaN wherever
+    /// `compensated` is NaN (no valid count, a NaN correction). See [`tcomp_core::frame`] for the
+    /// error bound. Not on the loop's path: the QEMU replay compares the f32 records.
+    pub fn precise_value(&self, k: usize, rec: &Record) -> f64 {
+        let Some(cfg) = self.config.get(k) else {
+            return f64::NAN;
+        };
+        if rec.compensated.is_nan() || rec.periods == 0 {
+            return f64::NAN;
+        }
+        let interval = f64::from(PERIOD_S) * f64::from(rec.periods);
+        f64::from(rec.counts) * f64::from(cfg.scale.per_pulse()) / interval
+            - f64::from(rec.correction)
+    }
 }
+
+#[cfg(test)]
+#[path = "app_tests.rs"]
+mod tests;

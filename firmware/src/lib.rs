@@ -1,6 +1,6 @@
-//! The firmware: the compensation loop ([`app`]), the model-blob image in flash ([`image`]), the
-//! replay board of the QEMU run ([`replay`]), and board support for the binaries (semihosting exit
-//! codes, the SysTick instruction counter).
+//! The firmware: the compensation loop ([`app`]), the fault record kept across resets ([`fault`]),
+//! the model-blob image in flash ([`image`]), the replay board of the QEMU run ([`replay`]), and
+//! board support for the binaries (semihosting exit codes, the SysTick instruction counter).
 //!
 //! Only the board support touches hardware and is compiled for the target alone
 //! (`cfg(target_os = "none")`); the rest builds on the host, where `cargo xtask qemu` runs the very
@@ -12,6 +12,7 @@
 #![no_std]
 
 pub mod app;
+pub mod fault;
 pub mod image;
 pub mod replay;
 

@@ -126,6 +126,7 @@ impl<'a> Vector<'a> {
         Record {
             compensated: f32::from_bits(u32_at(self.bytes, at)),
             status: u32_at(self.bytes, at + 4) as u16,
+            ..Record::default()
         }
     }
 

@@ -45,6 +45,8 @@ enum Command {
     Report(cmd::report::Args),
     /// The discovery loop on a simulated IFOG: fit, diagnose, add the missing term, refit.
     Demo(cmd::demo::Args),
+    /// Decode a capture of the firmware's serial output frames into CSV (or JSON).
+    Frames(cmd::frames::Args),
 }
 
 fn main() -> ExitCode {
@@ -77,6 +79,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Compare(args) => cmd::compare::run(&args),
         Command::Report(args) => cmd::report::run(&args),
         Command::Demo(args) => cmd::demo::run(&args),
+        Command::Frames(args) => cmd::frames::run(&args),
     }
 }
 

@@ -13,6 +13,8 @@
 //! * [`compensator`] — the immutable model apart from the per-channel streaming state:
 //!   `step(inputs, raw) → (compensated, status)`.
 //!
+//! [`frame`] is the output frame the firmware sends per sample and the host decodes.
+//!
 //! Capacities are const generics (`C` centers, `F` features, `N` program nodes), so the firmware sizes
 //! its models for its channels and the host uses the large defaults.
 #![no_std]
@@ -20,6 +22,8 @@
 pub mod blob;
 pub mod compensator;
 pub mod fastexp;
+pub mod frame;
+pub mod image;
 pub mod parse;
 pub mod point;
 pub mod program;

@@ -9,7 +9,11 @@
 //! ```
 //! A `name` is a signal defined earlier or else an input column. Functions: `sq`, `abs`, `mean`,
 //! `rate`, `lag`, `hyst`, `clamp`; their parameters after the first argument must be constant
-//! expressions. Constant sub-expressions are folded, so `-2 * 3` costs no node.
+//! expressions. Constant sub-expressions are folded, so `-2 * 3` costs no node. A division by a
+//! constant zero (`T / 0`, `T / (2 - 2)`, or by a signal defined as `0`) is refused here, pointing at
+//! the divisor, rather than giving a feature that is NaN or infinite on every sample. Nesting
+//! (parentheses, calls, unary minus) is limited to a fixed depth, so the recursion of the parser is
+//! bounded whatever the text.
 //! It runs without allocation, so the firmware could compile expressions too.
 
 use crate::program::{DEFAULT_RATE_WINDOW_S, Op, ProgramBuilder};
@@ -44,6 +48,8 @@ pub enum ParseErrorKind {
     BadParameter,
     /// Nesting deeper than the parser allows.
     TooDeep,
+    /// A division by a constant zero.
+    DivisionByZero,
     /// The program is out of nodes.
     TooManyNodes,
     /// The program reads too many input columns.
@@ -81,6 +87,7 @@ impl ParseErrorKind {
                 "parameter out of range (windows and time constants > 0, thresholds >= 0, lo <= hi)"
             }
             Self::TooDeep => "expression nested too deeply",
+            Self::DivisionByZero => "division by a constant zero",
             Self::TooManyNodes => "the program is out of operation slots",
             Self::TooManyInputs => "too many input columns",
             Self::TooManyFeatures => "too many features",
@@ -92,7 +99,8 @@ impl ParseErrorKind {
     }
 }
 
-/// A parse error: the byte range `start..end` of the expression it concerns, and why.
+/// A parse error: the byte range `start..end` of the expression it concerns, and why. The range lies
+/// within the text given (`start == end == len` for something missing at its end).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ParseError {
@@ -198,6 +206,8 @@ struct Parser<'a, 'b, const N: usize, const F: usize> {
 
 impl<'a, const N: usize, const F: usize> Parser<'a, '_, N, F> {
     fn err_at(&self, start: usize, end: usize, kind: ParseErrorKind) -> ParseError {
+        let start = start.min(self.src.len());
+        let end = end.clamp(start, self.src.len());
         ParseError {
             start: start.min(u16::MAX as usize) as u16,
             end: end.min(u16::MAX as usize) as u16,
@@ -252,7 +262,22 @@ impl<'a, const N: usize, const F: usize> Parser<'a, '_, N, F> {
         }
     }
 
-    fn binary(&mut self, op: u8, a: u8, b: u8, start: usize) -> Result<u8, ParseError> {
+    /// `a op b`, folded when both are constants; `divisor` is the text span of `b`, for the error
+    /// of a division by a constant zero.
+    fn binary(
+        &mut self,
+        op: u8,
+        a: u8,
+        b: u8,
+        start: usize,
+        divisor: (usize, usize),
+    ) -> Result<u8, ParseError> {
+        if op == b'/' && self.constant_of(b) == Some(0.0) {
+            // The divisor's text without the blanks the parser skipped after it.
+            let text = self.src.get(divisor.0..divisor.1).unwrap_or("");
+            let end = divisor.0 + text.trim_end().len();
+            return Err(self.err_at(divisor.0, end, ParseErrorKind::DivisionByZero));
+        }
         if let (Some(x), Some(y)) = (self.constant_of(a), self.constant_of(b)) {
             let len = self.b.program.nodes.len();
             if a as usize >= self.floor && a as usize + 2 == len && b as usize + 1 == len {
@@ -291,8 +316,10 @@ impl<'a, const N: usize, const F: usize> Parser<'a, '_, N, F> {
             match self.peek() {
                 Some(op @ (b'+' | b'-')) => {
                     self.pos += 1;
+                    self.skip_ws();
+                    let rhs_start = self.pos;
                     let rhs = self.term()?;
-                    acc = self.binary(op, acc, rhs, start)?;
+                    acc = self.binary(op, acc, rhs, start, (rhs_start, self.pos))?;
                 }
                 _ => break,
             }
@@ -310,8 +337,10 @@ impl<'a, const N: usize, const F: usize> Parser<'a, '_, N, F> {
             match self.peek() {
                 Some(op @ (b'*' | b'/')) => {
                     self.pos += 1;
+                    self.skip_ws();
+                    let rhs_start = self.pos;
                     let rhs = self.unary()?;
-                    acc = self.binary(op, acc, rhs, start)?;
+                    acc = self.binary(op, acc, rhs, start, (rhs_start, self.pos))?;
                 }
                 _ => break,
             }

@@ -72,3 +72,91 @@ proptest::proptest! {
         let _ = b.line(s);
     }
 }
+
+/// The error of `line` as (start, end, kind).
+fn span(line: &'static str) -> (u16, u16, K) {
+    let mut b = ProgramBuilder::<48, 8>::new();
+    let e = b.line(line).unwrap_err();
+    (e.start, e.end, e.kind)
+}
+
+#[test]
+fn constant_division_by_zero_is_refused_at_the_divisor() {
+    assert_eq!(span("T/0"), (2, 3, K::DivisionByZero));
+    assert_eq!(span("T / 0.0"), (4, 7, K::DivisionByZero));
+    assert_eq!(span("T / -0"), (4, 6, K::DivisionByZero));
+    // Constants are folded, so a divisor that folds to zero is caught too.
+    assert_eq!(span("T/(2-2)"), (2, 7, K::DivisionByZero));
+    assert_eq!(span("T / (0 * 5) + 1"), (4, 11, K::DivisionByZero));
+    assert_eq!(span("1/0"), (2, 3, K::DivisionByZero));
+    assert_eq!(span("rate(T / 0e3)"), (9, 12, K::DivisionByZero));
+    // Inside a signal definition the position is within the line.
+    assert_eq!(span("R = t_a / (1 - 1)"), (10, 17, K::DivisionByZero));
+    // A signal that is the constant zero.
+    let mut b = ProgramBuilder::<48, 8>::new();
+    b.line("Z = 0").unwrap();
+    let e = b.line("T / Z  ").unwrap_err();
+    assert_eq!((e.start, e.end, e.kind), (4, 5, K::DivisionByZero));
+    assert!(
+        e.to_string()
+            .starts_with("column 5: division by a constant zero"),
+        "{e}"
+    );
+}
+
+#[test]
+fn nonzero_or_varying_divisors_still_compile() {
+    for line in [
+        "T/2",
+        "T / (2 - 1)",
+        "T/1e-30",
+        "T / -0.5",
+        "T / (T - T)",
+        "T / rate(T)",
+    ] {
+        let mut b = ProgramBuilder::<48, 8>::new();
+        b.line(line).unwrap();
+        b.finish().unwrap();
+    }
+}
+
+#[test]
+fn error_positions_lie_within_the_text() {
+    for line in ["(a + b", "rate(T, 1", "a +", "sq(", "T = (a"] {
+        let (start, end, _) = span(line);
+        assert!(
+            start <= end && usize::from(end) <= line.len(),
+            "{line}: {start}..{end}"
+        );
+    }
+}
+
+/// Nesting far beyond the limit, in each form that recurses, is a `TooDeep` error and never a stack
+/// overflow.
+#[test]
+fn deep_nesting_is_an_error_not_a_crash() {
+    let n = 100_000;
+    let forms = [
+        format!("{}x{}", "(".repeat(n), ")".repeat(n)),
+        format!("{}x", "-".repeat(n)),
+        format!("{}x{}", "sq(".repeat(n), ")".repeat(n)),
+        format!("{}x{}", "(-sq(".repeat(n), "))".repeat(n)),
+        format!("{}x", "(".repeat(n)),
+        format!("x{}", "*(x".repeat(n)),
+        format!("mean({}x", "x, mean(".repeat(n)),
+    ];
+    for text in &forms {
+        let mut b = ProgramBuilder::<255, 8>::new();
+        let e = b.feature(text).unwrap_err();
+        assert!(
+            matches!(e.kind, K::TooDeep),
+            "{}…: {:?}",
+            &text[..12],
+            e.kind
+        );
+    }
+    // Just under the limit compiles.
+    let ok = format!("{}x{}", "(".repeat(22), ")".repeat(22));
+    let mut b = ProgramBuilder::<255, 8>::new();
+    b.feature(&ok).unwrap();
+}

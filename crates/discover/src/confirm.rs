@@ -42,6 +42,33 @@ impl Default for ConfirmOptions {
     }
 }
 
+impl ConfirmOptions {
+    /// Checks the held-out bin and the folds against their valid ranges.
+    pub fn validate(&self) -> std::result::Result<(), tcomp_train::TrainError> {
+        tcomp_train::options::Bound {
+            flag: "heldout_bin_s",
+            key: "",
+            min: 0.0,
+            min_exclusive: true,
+            max: 1e7,
+            unit: "s",
+            why: "the bin of the held-out residual",
+        }
+        .check(self.heldout_bin_s)?;
+        tcomp_train::options::Bound {
+            flag: "folds",
+            key: "",
+            min: 2.0,
+            min_exclusive: false,
+            max: 100.0,
+            unit: "",
+            why: "contiguous blocks of the training run held out in turn",
+        }
+        .check_count(self.folds, "")?;
+        Ok(())
+    }
+}
+
 /// The real refit of one candidate.
 #[derive(Clone, Debug, Serialize)]
 pub struct Confirmation {

@@ -89,6 +89,18 @@ pub struct DiagnoseOptions {
     pub roles: Option<Roles>,
 }
 
+impl DiagnoseOptions {
+    /// Checks every threshold and bin against its valid range (the flags are named as typed:
+    /// `--min-evidence`, `--min-improvement`, `--bin`). A NaN threshold would compare false
+    /// everywhere and silently flip the verdict.
+    pub fn validate(&self) -> Result<()> {
+        self.criterion.validate()?;
+        self.score.validate()?;
+        self.confirm.validate()?;
+        Ok(())
+    }
+}
+
 /// The model as given.
 #[derive(Clone, Debug, Serialize)]
 pub struct ModelSummary {
@@ -159,9 +171,19 @@ pub fn diagnose(
     opts: &DiagnoseOptions,
 ) -> Result<Analysis> {
     let t0 = Instant::now();
+    opts.validate()?;
     let info = model_info(model);
     let roles = opts.roles.clone().unwrap_or_else(|| info.roles.clone());
     let temp = opts.temperature.as_deref();
+    let step = tcomp_train::dataset::median_step(data.time(&roles.time)?);
+    if opts.score.bin_s < step {
+        return Err(DiscoverError::Invalid(format!(
+            "--bin {}: shorter than the sampling step of {} ({} s), so a bin would hold no sample",
+            tcomp_train::options::num(opts.score.bin_s),
+            data.file(),
+            tcomp_train::options::num(step)
+        )));
+    }
     let run = metrics::run_model(model, data, &roles, temp, opts.score.gap_s)?;
     let verify_run = verify
         .map(|v| metrics::run_model(model, v, &roles, temp, opts.score.gap_s))

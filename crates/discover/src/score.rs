@@ -30,10 +30,12 @@ use crate::error::{DiscoverError, Result};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
+use tcomp_train::TrainError;
 use tcomp_train::bayes::{self, BayesOptions};
 use tcomp_train::dataset::segments;
 use tcomp_train::evidence::{self, GroupFit};
 use tcomp_train::features::{self, FeatureSpec, bin_mean, bins};
+use tcomp_train::options::Bound;
 use tcomp_train::rbf64::Rbf64;
 use tcomp_train::{Dataset, Roles};
 
@@ -58,6 +60,45 @@ impl Default for ScoreOptions {
             folds: 5,
             gap_s: None,
         }
+    }
+}
+
+/// A bin length in seconds: positive, and under 10⁷ s (longer than any chamber run). Against the
+/// data, a bin must also hold samples; [`tcomp_train::options::check_bin`] checks that once the
+/// data are known.
+const fn bin_bound(flag: &'static str) -> Bound {
+    Bound {
+        flag,
+        key: "",
+        min: 0.0,
+        min_exclusive: true,
+        max: 1e7,
+        unit: "s",
+        why: "an averaging bin",
+    }
+}
+
+impl ScoreOptions {
+    /// Checks the bins, the folds and the gap against their valid ranges.
+    pub fn validate(&self) -> std::result::Result<(), TrainError> {
+        bin_bound("--bin").check(self.bin_s)?;
+        bin_bound("heldout_bin_s").check(self.heldout_bin_s)?;
+        // Two blocks at least (one to fit, one to predict); more than 100 leaves blocks of a few
+        // bins that say nothing.
+        Bound {
+            flag: "folds",
+            key: "",
+            min: 2.0,
+            min_exclusive: false,
+            max: 100.0,
+            unit: "",
+            why: "contiguous blocks of the training run held out in turn",
+        }
+        .check_count(self.folds, "")?;
+        if let Some(g) = self.gap_s {
+            tcomp_train::options::GAP.check(g)?;
+        }
+        Ok(())
     }
 }
 

@@ -8,7 +8,7 @@
 //! as a signed N-bit value ([`wrapping_delta`]), which is exact as long as fewer than 2^(N−1) pulses
 //! arrive between reads (for a 32-bit counter and a 200 Hz loop: 4·10¹¹ pulses/s, never reached).
 
-use crate::error::ErrorType;
+use crate::error::{Error, ErrorKind, ErrorType};
 
 /// One up/down pulse channel.
 ///
@@ -43,10 +43,58 @@ use crate::error::ErrorType;
 pub trait PulseCounter: ErrorType {
     /// Signed number of pulses since the previous call (up pulses positive, down pulses negative).
     ///
-    /// The first call after initialisation returns the pulses since initialisation. Pulses are never
-    /// lost across a failed call: after a bus error the next successful call returns everything since
-    /// the last successful one.
+    /// The first call after initialisation returns the pulses since initialisation.
+    ///
+    /// What an error means for the interval depends on its [`kind`](crate::Error::kind) (see
+    /// [`Interval::from_result`]): [`ErrorKind::Overflow`] and [`ErrorKind::Fault`] say the interval
+    /// *was consumed* but its pulses are not valid (lost pulses, an instrument or clock fault), so the
+    /// next call covers the next interval only; any other kind (a bus error, …) says nothing was
+    /// consumed, the pulses are still in the counter and the next successful call returns everything
+    /// since the last successful one.
     fn read_delta(&mut self) -> Result<i32, Self::Error>;
+}
+
+/// What one counter channel says about one loop period.
+#[derive(Debug, Copy, Clone, Eq, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Interval {
+    /// Valid pulses since the channel was last consumed.
+    Counted(i32),
+    /// The interval was consumed but is not valid (pulses lost, instrument or clock fault): its
+    /// pulses are gone, the next interval starts clean.
+    Flagged(ErrorKind),
+    /// The read failed before consuming anything (bus error, not ready): the pulses are still in
+    /// the counter and the next successful read covers this interval too.
+    Unread(ErrorKind),
+}
+
+impl Interval {
+    /// Classifies a [`PulseCounter::read_delta`] result by its error kind.
+    pub fn from_result<E: Error>(result: Result<i32, E>) -> Self {
+        match result {
+            Ok(delta) => Self::Counted(delta),
+            Err(e) => match e.kind() {
+                kind @ (ErrorKind::Overflow | ErrorKind::Fault) => Self::Flagged(kind),
+                kind => Self::Unread(kind),
+            },
+        }
+    }
+}
+
+/// A block of counter channels that are latched together: one call takes **one** snapshot of every
+/// channel and consumes all of them, so a loop sees all its instruments at the same instant (reading
+/// channel handles one by one would latch once per channel).
+pub trait CounterSnapshot {
+    /// Latches every channel once and writes channel `i`'s [`Interval`] into `out[i]`, for as many
+    /// channels as both have; a failed bus read makes every one of them [`Interval::Unread`].
+    fn read_snapshot(&mut self, out: &mut [Interval]);
+}
+
+impl<T: CounterSnapshot + ?Sized> CounterSnapshot for &mut T {
+    #[inline]
+    fn read_snapshot(&mut self, out: &mut [Interval]) {
+        T::read_snapshot(self, out);
+    }
 }
 
 impl<T: PulseCounter + ?Sized> PulseCounter for &mut T {

@@ -6,7 +6,8 @@
 //! (an [`ErrorType`] whose error has a [`kind()`](Error::kind) in a small [`ErrorKind`]):
 //!
 //! - [`Thermometer`] — one temperature channel, in °C;
-//! - [`PulseCounter`] — one up/down pulse channel, counts since the previous read.
+//! - [`PulseCounter`] — one up/down pulse channel, counts since the previous read;
+//! - [`CounterSnapshot`] — a block of pulse channels latched together, read once per sample.
 //!
 //! and drivers for real parts on [`embedded_hal::spi::SpiDevice`]:
 //!
@@ -30,7 +31,7 @@ pub mod scale;
 pub mod thermistor;
 pub mod thermometer;
 
-pub use counter::{PulseCounter, wrapping_delta};
+pub use counter::{CounterSnapshot, Interval, PulseCounter, wrapping_delta};
 pub use error::{Error, ErrorKind, ErrorType};
 pub use thermometer::Thermometer;
 

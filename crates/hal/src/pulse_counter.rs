@@ -34,18 +34,23 @@
 //! *consumed*, and the delta is the wrapping difference ([`wrapping_delta`]) — exact across the
 //! 2³² wrap in both directions. Event flags are accumulated per channel until that channel is
 //! consumed, so reading channels one at a time (the [`PulseCounter`] handles of
-//! [`CounterBlock::channel`]) loses neither pulses nor faults; [`CounterBlock::sample`] consumes all
-//! channels of one snapshot at once and is what a fixed-rate loop should call.
+//! [`CounterBlock::channel`]) loses neither pulses nor faults; [`CounterBlock::sample`] (and the
+//! [`CounterSnapshot`] impl over it) consumes all channels of one snapshot at once and is what a
+//! fixed-rate loop should call.
 //!
 //! An interval with a flag set is still *consumed* (its pulses are returned, marked invalid), so the
 //! next interval starts clean; an interval whose read failed on the bus is not, so the next
-//! successful read covers it.
+//! successful read covers it. The loop must tell the two apart (dividing the next interval's pulses by
+//! two periods after a flagged one would halve the rate): [`CounterSnapshot::read_snapshot`] says it
+//! with [`Interval::Flagged`] / [`Interval::Unread`], and a [`PulseCounter`] handle's error kinds say
+//! the same ([`ErrorKind::Overflow`] and [`ErrorKind::Fault`] consumed, [`ErrorKind::Bus`] not; see
+//! [`Interval::from_result`]).
 
 use core::fmt;
 
 use embedded_hal::spi::{Operation, SpiDevice};
 
-use crate::counter::{PulseCounter, wrapping_delta};
+use crate::counter::{CounterSnapshot, Interval, PulseCounter, wrapping_delta};
 use crate::error::{self, ErrorKind, ErrorType};
 
 /// Command bytes.
@@ -498,6 +503,28 @@ impl<SPI: SpiDevice, const N: usize> PulseCounter for Channel<'_, SPI, N> {
         match Error::from_flags(reading.flags) {
             Some(e) => Err(e),
             None => Ok(reading.delta),
+        }
+    }
+}
+
+/// The block as one latched snapshot per call: what a fixed-rate loop reads.
+impl<SPI: SpiDevice, const N: usize> CounterSnapshot for CounterBlock<SPI, N> {
+    fn read_snapshot(&mut self, out: &mut [Interval]) {
+        match self.sample() {
+            Ok(sample) => {
+                for (o, reading) in out.iter_mut().zip(sample.channels.iter()) {
+                    *o = match reading.flags.check() {
+                        Ok(()) => Interval::Counted(reading.delta),
+                        Err(kind) => Interval::Flagged(kind),
+                    };
+                }
+            }
+            Err(e) => {
+                let kind = error::Error::kind(&e);
+                for o in out.iter_mut().take(N) {
+                    *o = Interval::Unread(kind);
+                }
+            }
         }
     }
 }

@@ -7,7 +7,7 @@ use common::FailAt;
 use embedded_hal_mock::eh1::spi::{Mock, Transaction as Tx};
 use proptest::prelude::*;
 use tcomp_hal::pulse_counter::{self, ChannelFlags, CounterBlock, Error, ID_VALUE, Info, status};
-use tcomp_hal::{Error as _, ErrorKind, PulseCounter, wrapping_delta};
+use tcomp_hal::{CounterSnapshot, Error as _, ErrorKind, Interval, PulseCounter, wrapping_delta};
 
 /// INFO: 8 channels, 32-bit counters, 10 MHz timestamp clock (10 000 kHz = 0x2710).
 const INFO: u32 = 0x2710_2008;
@@ -292,4 +292,70 @@ proptest! {
         let now = prev.wrapping_add(delta as u16);
         prop_assert_eq!(wrapping_delta(u32::from(prev), u32::from(now), 16), i32::from(delta));
     }
+}
+
+#[test]
+fn snapshot_trait_latches_once_and_tells_flagged_from_unread() {
+    let mut e = init_frames(&[0, 0, 0], 0);
+    e.extend(snapshot(1 << (status::FAULT_SHIFT + 1), 10, &[5, 6, 7]));
+    // Transaction 3 fails on the bus (see below); the next snapshot covers both periods.
+    e.extend(snapshot(0, 30, &[15, 16, 17]));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 3> = CounterBlock::new(FailAt::new(spi.clone(), 3));
+    block.init().unwrap();
+    // A longer output than the block: the extra entries are left alone.
+    let untouched = Interval::Counted(-1);
+    let mut out = [untouched; 4];
+
+    block.read_snapshot(&mut out);
+    assert_eq!(
+        out,
+        [
+            Interval::Counted(5),
+            Interval::Flagged(ErrorKind::Fault),
+            Interval::Counted(7),
+            untouched,
+        ]
+    );
+    block.read_snapshot(&mut out);
+    assert_eq!(out[..3], [Interval::Unread(ErrorKind::Bus); 3]);
+    assert_eq!(out[3], untouched);
+    // Nothing was consumed by the failed read.
+    block.read_snapshot(&mut out);
+    assert_eq!(
+        out[..3],
+        [
+            Interval::Counted(10),
+            Interval::Counted(10),
+            Interval::Counted(10)
+        ]
+    );
+    spi.done();
+}
+
+#[test]
+fn interval_from_result_follows_the_error_kind() {
+    let mut e = init_frames(&[0], 0);
+    e.extend(snapshot(1 << status::LOST_SHIFT, 1, &[5]));
+    e.extend(snapshot(status::CLOCK_FAULT, 2, &[6]));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 1> = CounterBlock::new(FailAt::new(spi.clone(), 4));
+    block.init().unwrap();
+    assert_eq!(
+        Interval::from_result(block.read_delta()),
+        Interval::Flagged(ErrorKind::Overflow)
+    );
+    assert_eq!(
+        Interval::from_result(block.read_delta()),
+        Interval::Flagged(ErrorKind::Fault)
+    );
+    assert_eq!(
+        Interval::from_result(block.read_delta()),
+        Interval::Unread(ErrorKind::Bus)
+    );
+    assert_eq!(
+        Interval::from_result(Ok::<_, ErrorKind>(3)),
+        Interval::Counted(3)
+    );
+    spi.done();
 }

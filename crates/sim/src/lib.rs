@@ -16,7 +16,7 @@
 //!
 //! Modules: [`profile`] (chamber profiles), [`thermal`] (lags, self-heating), [`effects`] (named
 //! bias effects), [`noise`] (white, Gauss–Markov, pulses, statistics), [`scenario`] (TOML and
-//! validation), [`writer`] (streaming CSV), [`truth`] (JSON truth), [`presets`], [`expr`] (a
+//! validation), [`writer`] (streaming CSV), [`progress`] (reporting long runs), [`truth`] (JSON truth), [`presets`], [`expr`] (a
 //! reference evaluator for checking expressions), [`ops`] (the core's operators mirrored).
 
 pub mod effects;
@@ -27,6 +27,7 @@ pub mod noise;
 pub mod ops;
 pub mod presets;
 pub mod profile;
+pub mod progress;
 pub mod scenario;
 pub mod thermal;
 pub mod truth;
@@ -65,8 +66,11 @@ pub fn simulate_to_writer<W: std::io::Write>(scenario: &Scenario, writer: W) -> 
     Ok(truth)
 }
 
-/// Streams `scenario` to a CSV file, gzip-compressed when `path` ends with `.gz`.
+/// Streams `scenario` to a CSV file, gzip-compressed when `path` ends with `.gz`. The scenario is
+/// validated before the file is created, so a bad scenario leaves an existing file untouched (the
+/// file is written in place, though: use [`write_preset`] for all-or-nothing output).
 pub fn simulate_to_path(scenario: &Scenario, path: &Path) -> Result<Truth> {
+    scenario.validate()?;
     let mut sink = writer::FileSink::create(path)?;
     let truth = engine::run(scenario, &mut sink)?;
     sink.close(path)?;
@@ -76,11 +80,42 @@ pub fn simulate_to_path(scenario: &Scenario, path: &Path) -> Result<Truth> {
 /// Writes a preset's `train.csv`, `verify.csv` (`.csv.gz` with `gzip`) and `truth.json` into `dir`
 /// (created if missing); returns the truth file's contents.
 pub fn write_preset(preset: &Preset, dir: &Path, gzip: bool) -> Result<TruthFile> {
+    write_preset_with_progress(preset, dir, gzip, &mut progress::Silent)
+}
+
+/// [`write_preset`], reporting the rows written to `progress` (one task per run).
+///
+/// Nothing in `dir` is touched unless everything succeeds: both scenarios are validated before
+/// any file is created, every file is written to a temporary in `dir` and the three are renamed
+/// into place only once all are complete (a failure removes the temporaries). An existing run in
+/// `dir` therefore survives a bad option, a bad scenario or a full disk.
+pub fn write_preset_with_progress(
+    preset: &Preset,
+    dir: &Path,
+    gzip: bool,
+    progress: &mut dyn progress::Progress,
+) -> Result<TruthFile> {
+    preset.train.validate()?;
+    preset.verify.validate()?;
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let ext = if gzip { "csv.gz" } else { "csv" };
     let (train_name, verify_name) = (format!("train.{ext}"), format!("verify.{ext}"));
-    let train = simulate_to_path(&preset.train, &dir.join(&train_name))?;
-    let verify = simulate_to_path(&preset.verify, &dir.join(&verify_name))?;
+    let mut staged = Staged::new(dir);
+    let mut run = |sc: &Scenario, name: &str, label: &str| -> Result<Truth> {
+        let tmp = staged.add(name);
+        progress.start(label, sc.rows());
+        let mut sink = progress::Counting::new(writer::FileSink::create(&tmp)?, &mut *progress);
+        let truth = engine::run(sc, &mut sink)?;
+        sink.into_inner().close(&tmp)?;
+        Ok(truth)
+    };
+    let train = run(&preset.train, &train_name, "simulating the training run")?;
+    let verify = run(
+        &preset.verify,
+        &verify_name,
+        "simulating the verification run",
+    )?;
+    progress.finish();
     let file = TruthFile {
         name: preset.name.clone(),
         description: preset.description.clone(),
@@ -98,8 +133,57 @@ pub fn write_preset(preset: &Preset, dir: &Path, gzip: bool) -> Result<TruthFile
         train,
         verify,
     };
-    let path = dir.join("truth.json");
-    let json = serde_json::to_string_pretty(&file).map_err(|e| Error::io(&path, e.into()))?;
-    std::fs::write(&path, json + "\n").map_err(|e| Error::io(&path, e))?;
+    let tmp = staged.add("truth.json");
+    let json = serde_json::to_string_pretty(&file).map_err(|e| Error::io(&tmp, e.into()))?;
+    std::fs::write(&tmp, json + "\n").map_err(|e| Error::io(&tmp, e))?;
+    staged.commit()?;
     Ok(file)
+}
+
+/// Files written to temporaries beside their final names, renamed into place together by
+/// [`Staged::commit`]; dropped uncommitted, the temporaries are removed.
+struct Staged {
+    dir: std::path::PathBuf,
+    files: Vec<(std::path::PathBuf, String)>,
+    committed: bool,
+}
+
+impl Staged {
+    fn new(dir: &Path) -> Self {
+        Staged {
+            dir: dir.to_path_buf(),
+            files: Vec::new(),
+            committed: false,
+        }
+    }
+
+    /// The temporary path for the final file `name` (same directory, so the rename is atomic;
+    /// the name ends as the final one does, so `.gz` still selects compression).
+    fn add(&mut self, name: &str) -> std::path::PathBuf {
+        let tmp = self
+            .dir
+            .join(format!(".partial-{}-{name}", std::process::id()));
+        self.files.push((tmp.clone(), name.to_string()));
+        tmp
+    }
+
+    fn commit(mut self) -> Result<()> {
+        for (tmp, name) in &self.files {
+            let dst = self.dir.join(name);
+            std::fs::rename(tmp, &dst).map_err(|e| Error::io(&dst, e))?;
+        }
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.committed {
+            for (tmp, _) in &self.files {
+                // Best effort: a temporary that was never created is not an error.
+                let _ = std::fs::remove_file(tmp);
+            }
+        }
+    }
 }

@@ -222,6 +222,22 @@ pub struct Scenario {
     pub seed: u64,
 }
 
+/// The fastest internal rate accepted, Hz. The sensors simulated deliver their pulse or digital
+/// output at up to about 1 kHz (navigation-grade RLG, IFOG and QMA electronics), and the firmware
+/// compensates at 100–200 Hz; a faster internal rate models nothing more, it only costs time.
+pub const MAX_RATE_HZ: f64 = 1000.0;
+
+/// The most internal samples one run may take. The simulator does about 15 M internal samples per
+/// second for the three-thermometer RLG (measured, one core, 1000 Hz with 1 s rows), so this is a
+/// minute or two per run, shown with a progress bar; a 6-hour profile at [`MAX_RATE_HZ`] is
+/// 2.2·10⁷. Anything beyond is almost surely a mistyped rate or duration that would run for hours.
+pub const MAX_INTERNAL_SAMPLES: f64 = 1.0e9;
+
+/// The most output rows one run may write: 5·10⁷ rows are about 3.5 GB of CSV, and loading them
+/// takes about as much memory, more than the trainer accepts; the 100 Hz, 6-hour RLG run written
+/// row per sample is 2.2·10⁶.
+pub const MAX_ROWS: f64 = 5.0e7;
+
 impl Scenario {
     /// A scenario with the sensor's defaults, no effects, 1 Hz output, seed 1.
     pub fn new(sensor: SensorKind, profile: Profile) -> Self {
@@ -308,11 +324,36 @@ impl Scenario {
         )
     }
 
+    /// Internal samples of the whole run: the work the simulator does (each costs a few random
+    /// draws and one lag step per thermometer). Assumes a validated rate.
+    pub fn internal_samples(&self) -> f64 {
+        self.profile.duration_s() * self.rate_hz
+    }
+
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
         let pos = |v: f64, f: &str| Error::positive(f, v);
-        pos(self.rate_hz, "rate_hz")?;
-        pos(self.step_s, "step_s")?;
+        if !(self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= MAX_RATE_HZ) {
+            return Err(Error::invalid(
+                "rate_hz",
+                format!(
+                    "must be greater than 0 and at most {MAX_RATE_HZ} Hz (the fastest output of the \
+                     sensors simulated), got {}",
+                    self.rate_hz
+                ),
+            ));
+        }
+        if !(self.step_s.is_finite() && self.step_s > 0.0) {
+            return Err(Error::invalid(
+                "step_s",
+                format!(
+                    "must be a positive number of seconds, at least the sample period 1/rate_hz = \
+                     {} s, got {}",
+                    1.0 / self.rate_hz,
+                    self.step_s
+                ),
+            ));
+        }
         let k = self.step_s * self.rate_hz;
         if k < 1.0 - 1e-9 || (k - k.round()).abs() > 1e-6 * k.max(1.0) {
             return Err(Error::invalid(
@@ -330,8 +371,37 @@ impl Scenario {
         self.profile.validate("profile")?;
         if self.profile.duration_s() < self.step_s {
             return Err(Error::invalid(
-                "profile.segments",
-                "the profile is shorter than one output step",
+                "step_s",
+                format!(
+                    "{} s is longer than the whole profile ({} s): not one output row",
+                    self.step_s,
+                    self.profile.duration_s()
+                ),
+            ));
+        }
+        let rows = self.profile.duration_s() / self.step_s;
+        if rows > MAX_ROWS {
+            return Err(Error::invalid(
+                "step_s",
+                format!(
+                    "{} s rows over the {:.0} s profile are {rows:.3e} rows, more than the \
+                     {MAX_ROWS:.0e} a file may hold (gigabytes of CSV): use a longer step",
+                    self.step_s,
+                    self.profile.duration_s()
+                ),
+            ));
+        }
+        if self.internal_samples() > MAX_INTERNAL_SAMPLES {
+            return Err(Error::invalid(
+                "rate_hz",
+                format!(
+                    "{} Hz over the {:.0} s profile is {:.3e} internal samples, more than the \
+                     {MAX_INTERNAL_SAMPLES:.0e} a run may take: lower the rate or shorten the \
+                     profile",
+                    self.rate_hz,
+                    self.profile.duration_s(),
+                    self.internal_samples()
+                ),
             ));
         }
         let expect: Vec<String> = self

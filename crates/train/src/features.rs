@@ -119,11 +119,46 @@ pub fn compute(
             .and_then(|()| state.features(program, &mut x))
             .map_err(|e| TrainError::Step {
                 at: format!("{}:{}", data.file(), data.line(i)),
-                message: e.to_string(),
+                message: describe_step_error(e, program),
             })?;
         out.push(x);
     }
     Ok(out)
+}
+
+/// A step error in the user's terms: features and inputs numbered from 1 and named by their
+/// expression or column (the core's error counts from 0 and knows no names).
+pub fn describe_step_error<const N2: usize, const F2: usize>(
+    e: tcomp_core::StepError,
+    program: &Program<'_, N2, F2>,
+) -> String {
+    use tcomp_core::StepError;
+    match e {
+        StepError::NonFiniteFeature { feature } => {
+            let k = usize::from(feature);
+            match program.feature_exprs.get(k) {
+                Some(expr) => format!(
+                    "feature {} `{}` is NaN or infinite here (this is the first such row; a \
+                     division by zero or a logarithm of a non-positive value?)",
+                    k + 1,
+                    crate::dataset::clip(expr)
+                ),
+                None => format!("feature {} is NaN or infinite here", k + 1),
+            }
+        }
+        StepError::NonFiniteInput { index } => {
+            let k = usize::from(index);
+            match program.inputs.get(k) {
+                Some(name) => format!(
+                    "input column `{}` is NaN or infinite here",
+                    crate::dataset::clip(name)
+                ),
+                None => format!("input {} is NaN or infinite here", k + 1),
+            }
+        }
+        StepError::MissingInput { index } => format!("input {} is missing", usize::from(index) + 1),
+        other => other.to_string(),
+    }
 }
 
 /// Non-overlapping bins of `bin_s` seconds starting at the first sample: for each bin that holds at

@@ -9,6 +9,7 @@
 //! increases the error halves the learning rates (so it cannot diverge).
 
 use crate::error::TrainError;
+use crate::progress::{Progress, Silent, Unit};
 use crate::rbf64::Rbf64;
 
 /// Fits by gradient descent from the `mse` starting point; `iterations` full-batch steps at most.
@@ -18,6 +19,19 @@ pub fn fit(
     m: usize,
     seed: u64,
     iterations: usize,
+) -> Result<Rbf64, TrainError> {
+    fit_with_progress(x, y, m, seed, iterations, &Silent)
+}
+
+/// [`fit`], reporting each iteration to `progress` (on an unaveraged run each is a pass over
+/// millions of rows, and the whole fit takes minutes).
+pub fn fit_with_progress(
+    x: &[Vec<f64>],
+    y: &[f64],
+    m: usize,
+    seed: u64,
+    iterations: usize,
+    progress: &dyn Progress,
 ) -> Result<Rbf64, TrainError> {
     let mut rbf = crate::mse::fit(x, y, m, seed)?;
     let z: Vec<Vec<f64>> = x.iter().map(|r| rbf.normalise(r)).collect();
@@ -40,7 +54,9 @@ pub fn fit(
             / (2.0 * n)
     };
     let mut current = loss(&rbf);
-    for _ in 0..iterations {
+    progress.start("gradient descent", iterations as u64, Unit::Iterations);
+    for it in 0..iterations {
+        progress.set(it as u64);
         let mut gw = vec![0.0; k];
         let mut gb = 0.0;
         let mut gc = vec![vec![0.0; z.first().map_or(0, Vec::len)]; k];
@@ -99,6 +115,7 @@ pub fn fit(
             }
         }
     }
+    progress.finish();
     Ok(rbf)
 }
 

@@ -19,6 +19,7 @@
 
 pub mod bayes;
 pub mod blob_io;
+pub mod budget;
 pub mod dataset;
 pub mod error;
 pub mod evidence;
@@ -28,7 +29,9 @@ pub mod kmeans;
 pub mod metrics;
 pub mod mse;
 pub mod ols;
+pub mod options;
 pub mod poly3;
+pub mod progress;
 pub mod rbf64;
 pub mod spec;
 pub mod train;
@@ -37,4 +40,4 @@ pub use dataset::{DataError, Dataset};
 pub use error::TrainError;
 pub use metrics::{EvalReport, Roles};
 pub use spec::Spec;
-pub use train::{FitOptions, FitSummary, Fitted, Method, evaluate, fit};
+pub use train::{FitOptions, FitSummary, Fitted, Method, evaluate, fit, fit_with_progress};

@@ -44,7 +44,7 @@ impl Roles {
     pub fn reference_series(&self, data: &Dataset) -> Result<Vec<f64>, TrainError> {
         match (&self.reference, self.reference_value) {
             (Some(col), _) => Ok(data.column(col)?.to_vec()),
-            (None, Some(v)) => Ok(vec![v; data.len()]),
+            (None, Some(v)) => Ok(vec![crate::options::REFERENCE_VALUE.check(v)?; data.len()]),
             (None, None) => Err(TrainError::Invalid(
                 "no reference: give --reference COL or --reference-value X".into(),
             )),

@@ -14,6 +14,7 @@ use crate::error::TrainError;
 use crate::features::{self, FeatureSpec, bin_mean, bins};
 use crate::metrics::{self, EvalReport, Roles};
 use crate::mse::CenterSelection;
+use crate::options;
 use crate::rbf64::Rbf64;
 use crate::spec::Spec;
 use serde::Serialize;
@@ -133,6 +134,8 @@ pub struct FitOptions {
     pub from: Option<f64>,
     /// Train on time < this.
     pub until: Option<f64>,
+    /// The most memory the fit may take (bytes, estimated before allocating; see [`crate::budget`]).
+    pub memory_budget: u64,
 }
 
 impl FitOptions {
@@ -161,10 +164,12 @@ impl FitOptions {
             unit: String::new(),
             from: None,
             until: None,
+            memory_budget: crate::budget::DEFAULT_BUDGET_BYTES,
         }
     }
 
-    /// Options from a spec (file and flags merged).
+    /// Options from a spec (file and flags merged). Every number is range-checked here, with a
+    /// message naming both the flag and the spec key (see [`crate::options`] for the bounds).
     pub fn from_spec(spec: &Spec) -> Result<Self, TrainError> {
         let target = spec
             .target
@@ -179,17 +184,21 @@ impl FitOptions {
             o.time.clone_from(t);
         }
         o.reference.clone_from(&spec.reference);
-        o.reference_value = spec.reference_value;
+        if let Some(v) = spec.reference_value {
+            o.reference_value = Some(options::REFERENCE_VALUE.check(v)?);
+        }
         if let Some(m) = &spec.method {
             o.method = m.parse()?;
         }
         if let Some(a) = spec.average {
-            if !(a.is_finite() && a >= 0.0) {
-                return Err(TrainError::Invalid(format!(
-                    "--average must be ≥ 0 seconds, got {a}"
-                )));
-            }
-            o.average_s = Some(a);
+            o.average_s = Some(options::AVERAGE.check(a)?);
+        }
+        if let Some(c) = spec.centers {
+            let bound = match o.method {
+                Method::Mse | Method::Gradient => &options::CENTERS,
+                Method::Bayes | Method::Poly3 => &options::CENTERS_BAYES,
+            };
+            bound.check_count(c, &format!(" with --method {}", o.method))?;
         }
         o.centers = spec.centers;
         if let Some(l) = spec.linear {
@@ -201,11 +210,14 @@ impl FitOptions {
         if let Some(s) = &spec.select {
             o.select = s.parse()?;
         }
-        o.gap_s = spec.gap;
+        if let Some(g) = spec.gap {
+            o.gap_s = Some(options::GAP.check(g)?);
+        }
         if let Some(s) = spec.seed {
             o.seed = s;
         }
         if let Some(i) = spec.iterations {
+            options::ITERATIONS.check_count(i, "")?;
             o.iterations = i;
         }
         if let Some(s) = &spec.sensor {
@@ -217,8 +229,22 @@ impl FitOptions {
         if let Some(u) = &spec.unit {
             o.unit.clone_from(u);
         }
-        o.from = spec.from;
-        o.until = spec.until;
+        if let Some(f) = spec.from {
+            o.from = Some(options::FROM.check(f)?);
+        }
+        if let Some(u) = spec.until {
+            o.until = Some(options::UNTIL.check(u)?);
+        }
+        if let (Some(f), Some(u)) = (o.from, o.until)
+            && f >= u
+        {
+            return Err(TrainError::Invalid(format!(
+                "--from {} / --until {} (spec keys `from`, `until`): an empty window; --from \
+                 must be before --until",
+                options::num(f),
+                options::num(u)
+            )));
+        }
         Ok(o)
     }
 }
@@ -391,6 +417,44 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
             data.line(s)
         ));
     }
+    // Options built in code rather than by `from_spec` get the same checks.
+    if let Some(a) = opts.average_s {
+        options::AVERAGE.check(a)?;
+    }
+    if let Some(g) = opts.gap_s {
+        options::GAP.check(g)?;
+    }
+    if matches!(opts.method, Method::Mse | Method::Gradient) {
+        let centers = opts.centers.unwrap_or(DEFAULT_CENTERS);
+        options::CENTERS.check_count(centers, &format!(" with --method {}", opts.method))?;
+    }
+    if opts.method == Method::Gradient {
+        options::ITERATIONS.check_count(opts.iterations, "")?;
+    }
+    let span = time.last().copied().unwrap_or(0.0) - time.first().copied().unwrap_or(0.0);
+    let step = crate::dataset::median_step(time);
+    if let Some(a) = opts.average_s
+        && a > 0.0
+        && a < step
+    {
+        return Err(TrainError::Invalid(format!(
+            "--average {} (spec key `average`): shorter than the sampling step of {} ({} s), \
+             so a bin would hold no sample; use 0 for no averaging, or at least {} s",
+            options::num(a),
+            data.file(),
+            options::num(step),
+            options::num(step)
+        )));
+    }
+    let mut average_s = opts
+        .average_s
+        .unwrap_or_else(|| DEFAULT_AVERAGE_S.min(span / MIN_DEFAULT_BINS));
+    if opts.average_s.is_none() {
+        // Bursty records (short bursts minutes apart) leave most default bins empty.
+        average_s = crate::features::adaptive_bin(time, average_s, MIN_DEFAULT_BINS as usize);
+    }
+    let b = bins(time, average_s);
+    check_memory(opts, time, b.len(), &data)?;
     // The program actually stored (poly3 rewrites it around one clamped temperature).
     let spec = if opts.method == Method::Poly3 {
         let expr = opts.spec.features.first().ok_or_else(|| {
@@ -435,6 +499,19 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
                 .collect()
         })
         .collect();
+    // Too few rows is said as such (after any bad cell they hold), before a feature over them
+    // looks constant.
+    let need = min_samples(opts);
+    if time.len() < need {
+        return Err(DataError::TooFewSamples {
+            file: data.file().to_string(),
+            have: time.len(),
+            need,
+            after: " (rows)".to_string(),
+            why: format!("method {}", opts.method),
+        }
+        .into());
+    }
     check_features(&spec, &columns, opts.method != Method::Poly3)?;
     let mut ranges = Vec::with_capacity(nf);
     for k in 0..nf {
@@ -445,15 +522,6 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
             });
         ranges.push(FeatureRange { lo, hi });
     }
-    let span = time.last().copied().unwrap_or(0.0) - time.first().copied().unwrap_or(0.0);
-    let mut average_s = opts
-        .average_s
-        .unwrap_or_else(|| DEFAULT_AVERAGE_S.min(span / MIN_DEFAULT_BINS));
-    if opts.average_s.is_none() {
-        // Bursty records (short bursts minutes apart) leave most default bins empty.
-        average_s = crate::features::adaptive_bin(time, average_s, MIN_DEFAULT_BINS as usize);
-    }
-    let b = bins(time, average_s);
     let y = bin_mean(&error, &b);
     let cols: Vec<Vec<f64>> = columns.iter().map(|c| bin_mean(c, &b)).collect();
     let x: Vec<Vec<f64>> = (0..y.len())
@@ -482,8 +550,91 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
     })
 }
 
+/// The fewest training samples (after averaging) the method can be fitted on.
+fn min_samples(opts: &FitOptions) -> usize {
+    match opts.method {
+        Method::Bayes => 10,
+        Method::Poly3 => 8,
+        Method::Mse | Method::Gradient => 2 * opts.centers.unwrap_or(DEFAULT_CENTERS) + 2,
+    }
+}
+
+/// The shape of a fit of `samples` training samples over `rows` rows with `opts`.
+fn shape(opts: &FitOptions, rows: usize, samples: usize) -> crate::budget::Shape {
+    crate::budget::Shape {
+        rows,
+        samples,
+        features: if opts.method == Method::Poly3 {
+            1
+        } else {
+            opts.spec.features.len()
+        },
+        method: opts.method,
+        centers: opts.centers,
+        select: opts.select,
+        threads: rayon::current_num_threads(),
+    }
+}
+
+/// Refuses a fit whose estimated memory is over `opts.memory_budget`, suggesting the shortest
+/// averaging bin that would fit.
+fn check_memory(
+    opts: &FitOptions,
+    time: &[f64],
+    samples: usize,
+    data: &Dataset,
+) -> Result<(), TrainError> {
+    use crate::budget::{estimate, human};
+    let need = estimate(&shape(opts, time.len(), samples));
+    if need <= opts.memory_budget {
+        return Ok(());
+    }
+    let step = crate::dataset::median_step(time);
+    // From 1 s up: a bin that only just fits the budget would still be a fit of hours.
+    let suggestion = [1.0, 2.0, 5.0, 10.0, 30.0, 60.0, 120.0, 300.0, 600.0]
+        .into_iter()
+        .filter(|&a| a >= step && a > opts.average_s.unwrap_or(0.0))
+        .find(|&a| estimate(&shape(opts, time.len(), bins(time, a).len())) <= opts.memory_budget);
+    let averaged = match opts.average_s {
+        Some(a) if a > 0.0 => format!("averaged into {a} s bins"),
+        Some(_) => "unaveraged".to_string(),
+        None => "averaged".to_string(),
+    };
+    Err(TrainError::Invalid(format!(
+        "{}: a {} fit of {} rows {averaged} ({samples} samples) would need about {} of memory, \
+         more than the {} allowed{}",
+        data.file(),
+        opts.method,
+        time.len(),
+        human(need),
+        human(opts.memory_budget),
+        match suggestion {
+            Some(a) => format!(
+                "; average into bins (e.g. --average {a}, which needs {}; without --average the \
+                 default is {DEFAULT_AVERAGE_S} s), or pick a shorter window with --from/--until",
+                human(estimate(&shape(opts, time.len(), bins(time, a).len())))
+            ),
+            None => "; pick a shorter window with --from/--until".to_string(),
+        }
+    )))
+}
+
 /// Trains a model on `data` (restricted to `opts.from..opts.until` when given).
 pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
+    fit_with_progress(data, opts, &crate::progress::Silent)
+}
+
+/// [`fit`], reporting long steps (gradient iterations) to `progress`.
+pub fn fit_with_progress(
+    data: &Dataset,
+    opts: &FitOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<Fitted, TrainError> {
+    progress.start(
+        &format!("fitting ({})", opts.method),
+        0,
+        crate::progress::Unit::Iterations,
+    );
     let Prepared {
         data,
         mut spec,
@@ -497,11 +648,7 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
     } = prepare(data, opts)?;
     let time = data.time(&opts.time)?;
     let centers = opts.centers.unwrap_or(DEFAULT_CENTERS);
-    let need = match opts.method {
-        Method::Bayes => 10,
-        Method::Poly3 => 8,
-        Method::Mse | Method::Gradient => 2 * centers + 2,
-    };
+    let need = min_samples(opts);
     if y.len() < need {
         return Err(DataError::TooFewSamples {
             file: data.file().to_string(),
@@ -554,7 +701,18 @@ pub fn fit(data: &Dataset, opts: &FitOptions) -> Result<Fitted, TrainError> {
             }
             f
         }
-        Method::Gradient => crate::gradient::fit(&x, &y, centers, opts.seed, opts.iterations)?,
+        Method::Gradient => {
+            let f = crate::gradient::fit_with_progress(
+                &x,
+                &y,
+                centers,
+                opts.seed,
+                opts.iterations,
+                progress,
+            )?;
+            progress.start("measuring the fit", 0, crate::progress::Unit::Iterations);
+            f
+        }
         Method::Poly3 => crate::poly3::fit(&x, &y)?,
     };
     if width == 0.0 {
@@ -637,6 +795,11 @@ pub fn evaluate(
     temperature: Option<&str>,
     gap_s: Option<f64>,
 ) -> Result<EvalReport, TrainError> {
+    if let Some(g) = gap_s {
+        crate::options::GAP.check(g)?;
+    }
     let run = metrics::run_model(model, data, roles, temperature, gap_s)?;
+    // After the run, so that a bad cell is reported before the bin it would have been binned in.
+    crate::options::check_bin("--bin", bin_s, &run.time)?;
     Ok(metrics::report(&run, bin_s))
 }

@@ -159,3 +159,148 @@ fn gaps_are_warned_and_reset() {
     assert!(w.contains("gap.csv:2002") && w.contains("reset"), "{w}");
     assert_eq!(f.summary.train.gaps, 1);
 }
+
+fn gz_bytes(text: &str) -> Vec<u8> {
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    enc.write_all(text.as_bytes()).unwrap();
+    enc.finish().unwrap()
+}
+
+#[test]
+fn duplicate_column_names_are_refused_naming_both() {
+    let text = "time_s,t_coil_c,gyro_dph,t_coil_c\n0,1,2,3\n1,2,3,4\n";
+    let e = Dataset::from_reader("dup.csv", text.as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("dup.csv:1"), "{e}");
+    assert!(
+        e.contains("columns 2 and 4") && e.contains("`t_coil_c`"),
+        "{e}"
+    );
+}
+
+#[test]
+fn semicolons_tabs_and_decimal_commas_are_recognised() {
+    let e = Dataset::from_reader("semi.csv", "time_s;t_c;gyro\n0;20,5;0,01\n".as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("semi.csv:1") && e.contains("semicolons"), "{e}");
+    assert!(e.contains("decimal comma"), "{e}");
+    let e = Dataset::from_reader("semi.csv", "time_s;t_c;gyro\n0;20.5;0.01\n".as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("semicolons") && !e.contains("decimal comma"),
+        "{e}"
+    );
+    let e = Dataset::from_reader("tab.csv", "time_s\tt_c\tgyro\n0\t20.5\t0.01\n".as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("tab.csv:1") && e.contains("tabs"), "{e}");
+}
+
+#[test]
+fn long_cells_are_clipped_in_errors_at_a_character_boundary() {
+    let huge = "9x".repeat(2_500_000); // 5 MB
+    let text = format!("time_s,x\n0,1\n1,{huge}\n2,3\n");
+    let d = Dataset::from_reader("huge.csv", text.as_bytes()).unwrap();
+    let e = d.column("x").unwrap_err().to_string();
+    assert!(e.len() < 200, "{} bytes", e.len());
+    assert!(e.contains("huge.csv:3:2") && e.contains('…'), "{e}");
+    // Multi-byte characters: the cut never splits one.
+    let accents = "é".repeat(100);
+    let text = format!("time_s,x\n0,1\n1,{accents}\n");
+    let e = Dataset::from_reader("utf8.csv", text.as_bytes())
+        .unwrap()
+        .column("x")
+        .unwrap_err()
+        .to_string();
+    let shown = format!("{}…", "é".repeat(tcomp_train::dataset::MAX_ECHO_CHARS));
+    assert!(e.contains(&shown), "{e}");
+    // A long misspelled column name is clipped too.
+    let long_name = "n".repeat(10_000);
+    let e = d.column(&long_name).unwrap_err().to_string();
+    assert!(e.len() < 400, "{} bytes", e.len());
+}
+
+#[test]
+fn truncated_and_fake_gzip_are_named_with_the_line_reached() {
+    let full = gz_bytes(&good_csv(5000));
+    let cut = &full[..full.len() / 2];
+    let e = Dataset::from_gz_reader("run.csv.gz", cut)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("ends early") && e.contains("truncated"), "{e}");
+    let line: u64 = e
+        .strip_prefix("run.csv.gz:")
+        .and_then(|r| r.split(':').next())
+        .and_then(|l| l.parse().ok())
+        .unwrap_or_else(|| panic!("no line in {e}"));
+    assert!(line > 100, "{e}");
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(&dir, "plain.csv.gz", &good_csv(10));
+    let e = Dataset::load(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("plain.csv.gz:1") && e.contains("not gzip data"),
+        "{e}"
+    );
+}
+
+#[test]
+fn one_row_or_an_empty_window_is_named_not_a_constant_feature() {
+    let e = Dataset::from_reader("one.csv", "time_s,x\n0,1\n".as_bytes())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("one.csv") && e.contains("only one data row"),
+        "{e}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(&dir, "run.csv", &good_csv(3000));
+    let d = Dataset::load(&p).unwrap();
+    let mut opts = FitOptions::new("gyro_dph", &["t_coil_c"]);
+    opts.from = Some(5000.0);
+    let e = fit(&d, &opts).unwrap_err().to_string();
+    assert!(!e.contains("constant"), "{e}");
+    assert!(
+        e.contains("--from 5000") && e.contains("select 0 rows"),
+        "{e}"
+    );
+    assert!(e.contains("from 0 s to 2999 s"), "{e}");
+    opts.from = Some(2999.0);
+    let e = fit(&d, &opts).unwrap_err().to_string();
+    assert!(e.contains("select 1 row "), "{e}");
+    let e = d
+        .select_time("time_s", f64::NEG_INFINITY, -1.0)
+        .unwrap_err();
+    assert!(e.to_string().contains("--until -1"), "{e}");
+    let e = d.select_time("time_s", 10.0, 10.0).unwrap_err();
+    assert!(e.to_string().contains("empty window"), "{e}");
+    let e = d.select_time("time_s", f64::NAN, 10.0).unwrap_err();
+    assert!(e.to_string().contains("--from NaN"), "{e}");
+}
+
+#[test]
+fn a_runtime_division_by_zero_names_the_expression_and_the_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(&dir, "run.csv", &good_csv(3000));
+    let d = Dataset::load(&p).unwrap();
+    // t_coil_c is exactly 20 on the first row (line 2).
+    let opts = FitOptions::new("gyro_dph", &["t_coil_c", "1 / (t_coil_c - 20)"]);
+    let e = fit(&d, &opts).unwrap_err().to_string();
+    assert!(e.contains("run.csv:2"), "{e}");
+    assert!(e.contains("feature 2 `1 / (t_coil_c - 20)`"), "{e}");
+}
+
+#[test]
+fn a_few_rows_are_too_few_samples_not_a_constant_feature() {
+    let d = Dataset::from_reader("few.csv", good_csv(3).as_bytes()).unwrap();
+    let e = fit(&d, &FitOptions::new("gyro_dph", &["t_coil_c"]))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("few.csv") && e.contains("3 samples (rows)"),
+        "{e}"
+    );
+    assert!(!e.contains("constant"), "{e}");
+}

@@ -122,14 +122,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         until: args.until,
     };
     let opts = FitOptions::from_spec(&file_spec.merged(flags))?;
-    let progress = super::progress::spinner(args.quiet, "loading data");
-    let data = Dataset::load(&args.data)?;
-    progress.set_message(format!("fitting ({})", opts.method));
-    let fitted = tcomp_train::fit(&data, &opts)?;
+    let progress = super::progress::Bar::new(args.quiet);
+    let data = Dataset::load_with_progress(&args.data, &progress)?;
+    let fitted = tcomp_train::fit_with_progress(&data, &opts, &progress)?;
     let bytes = fitted.model.to_bytes()?;
     tcomp_train::blob_io::write_atomic(&args.out, &bytes)
         .with_context(|| format!("writing {}", args.out.display()))?;
-    progress.finish_and_clear();
+    progress.clear();
     let s = &fitted.summary;
     if args.json {
         outln!("{}", serde_json::to_string_pretty(s)?);

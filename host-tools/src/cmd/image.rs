@@ -2,22 +2,17 @@
 //! from its `MODELS` flash region (0x003F_0000, 64 KiB), flashed on its own without rebuilding the
 //! firmware, e.g. `probe-rs download --binary-format bin --base-address 0x3F0000 models.bin`.
 //!
-//! Layout (little-endian; the firmware's reader and its documentation are `firmware/src/image.rs`):
-//! magic `TCMI`, version u16 = 1, count u16, CRC-32 (ISO-HDLC) of the table u32, then `count`
-//! entries of (channel id u16, 0u16, offset u32, length u32), then the blobs, each 4-byte aligned.
+//! The layout is `tcomp_core::image`'s (documented there), written by its `write_image`: the
+//! firmware reads the image with the same module, so the two sides cannot disagree.
 //! Every blob is decoded into the firmware's own model types before it is written: a blob that would
 //! not load on the board (corrupt, or too many features, centers or program nodes) is refused here.
 use anyhow::{Context, bail};
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
+use tcomp_core::image::{MAX_ENTRIES, image_len, write_image};
 
 /// Size of the firmware's `MODELS` region.
 const REGION_BYTES: usize = 64 * 1024;
-const MAGIC: &[u8; 4] = b"TCMI";
-const VERSION: u16 = 1;
-const HEADER_LEN: usize = 12;
-const ENTRY_LEN: usize = 12;
-const MAX_ENTRIES: usize = 32;
 
 /// Arguments of `tcomp image`.
 #[derive(ClapArgs)]
@@ -53,33 +48,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         tcomp_train::blob_io::check_flight(&path, &bytes)?;
         blobs.push((id, bytes));
     }
-    let table_end = HEADER_LEN + ENTRY_LEN * blobs.len();
-    let mut table = Vec::new();
-    let mut body = Vec::new();
-    let mut offset = table_end.next_multiple_of(4);
-    for (id, bytes) in &blobs {
-        table.extend_from_slice(&id.to_le_bytes());
-        table.extend_from_slice(&0u16.to_le_bytes());
-        table.extend_from_slice(&(offset as u32).to_le_bytes());
-        table.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
-        body.extend_from_slice(bytes);
-        body.resize(body.len().next_multiple_of(4), 0);
-        offset = table_end.next_multiple_of(4) + body.len();
+    let entries: Vec<(u16, &[u8])> = blobs.iter().map(|(id, b)| (*id, b.as_slice())).collect();
+    let len = image_len(&entries)?;
+    if len > REGION_BYTES {
+        bail!("the image is {len} bytes, more than the {REGION_BYTES}-byte MODELS region");
     }
-    let mut image = Vec::with_capacity(offset);
-    image.extend_from_slice(MAGIC);
-    image.extend_from_slice(&VERSION.to_le_bytes());
-    image.extend_from_slice(&(blobs.len() as u16).to_le_bytes());
-    image.extend_from_slice(&tcomp_core::blob::crc32(&table).to_le_bytes());
-    image.extend_from_slice(&table);
-    image.resize(table_end.next_multiple_of(4), 0);
-    image.extend_from_slice(&body);
-    if image.len() > REGION_BYTES {
-        bail!(
-            "the image is {} bytes, more than the {REGION_BYTES}-byte MODELS region",
-            image.len()
-        );
-    }
+    let mut image = vec![0u8; len];
+    write_image(&entries, &mut image)?;
     let inputs: Vec<PathBuf> = args
         .models
         .iter()

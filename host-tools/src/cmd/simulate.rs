@@ -3,6 +3,10 @@
 //! Writes `train.csv`, `verify.csv` (`.csv.gz` with `--gzip`) and `truth.json` into `--out`, from a
 //! preset (`--preset NAME`, see `--list`) or a scenario TOML file (`--scenario FILE`; format in the
 //! documentation of `tcomp_sim::scenario`, example in `crates/sim/examples/ifog_custom.toml`).
+//!
+//! Every option and the scenario are checked before any file is created, and the three files are
+//! written to temporaries and renamed into place together, so a failed run leaves an existing
+//! output directory as it was. Long runs show a progress bar (rows, rate, time left).
 
 use std::path::PathBuf;
 
@@ -30,11 +34,12 @@ pub struct Args {
     /// Seed of the training run (the verification run uses seed + 1).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Internal sensor rate in Hz (e.g. 100 or 200); rows are still averaged to --step-s.
-    #[arg(long, value_name = "HZ")]
+    /// Internal sensor rate in Hz (e.g. 100 or 200, at most 1000); rows are still averaged to
+    /// --step-s.
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
     pub rate_hz: Option<f64>,
     /// Output step in seconds (a multiple of 1/rate); default 1 s, or the scenario's.
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub step_s: Option<f64>,
     /// Gzip the CSV files (`train.csv.gz`, `verify.csv.gz`).
     #[arg(long)]
@@ -42,6 +47,9 @@ pub struct Args {
     /// Print a machine-readable summary as JSON instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// No progress display.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Runs the subcommand.
@@ -81,7 +89,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let step = args.step_s.unwrap_or(preset.train.step_s.max(1.0 / rate));
         preset = preset.with_rate(rate, step);
     }
-    let truth = tcomp_sim::write_preset(&preset, out, args.gzip)?;
+    // Checked here, before anything is written, with the options named as typed.
+    for sc in [&preset.train, &preset.verify] {
+        sc.validate().map_err(|e| as_flags(e, args))?;
+    }
+    let mut progress = super::progress::Bar::new(args.quiet);
+    let truth = tcomp_sim::write_preset_with_progress(&preset, out, args.gzip, &mut progress)?;
+    progress.clear();
     if args.json {
         let run = |t: &tcomp_sim::Truth, file: Option<&String>| {
             serde_json::json!({
@@ -152,4 +166,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         t.columns.reference
     );
     Ok(())
+}
+
+/// A scenario error about the rate or the step, named by the flag that set it.
+fn as_flags(e: tcomp_sim::Error, args: &Args) -> anyhow::Error {
+    match &e {
+        tcomp_sim::Error::Invalid { field, message } => {
+            let flag = match field.as_str() {
+                "rate_hz" if args.rate_hz.is_some() => "--rate-hz",
+                "step_s" if args.step_s.is_some() => "--step-s",
+                _ => return e.into(),
+            };
+            anyhow::anyhow!("{flag}: {message}")
+        }
+        _ => e.into(),
+    }
 }

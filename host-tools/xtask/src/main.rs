@@ -1,11 +1,14 @@
 //! `cargo xtask`: the one entry point a person and CI both run.
 //!
 //! * `cargo xtask ci`   — fmt, clippy (host and thumbv7em, `-D warnings`), host tests, the no_std
-//!   build of the core, and the QEMU smoke run with its instruction budget.
+//!   build of the core, the STM32F407 board binary with its size budgets (`board.rs`), and the
+//!   QEMU smoke run with its instruction budget.
+//! * `cargo xtask board` — only the board binary's build, clippy and sizes.
 //! * `cargo xtask smoke` — only the QEMU smoke run.
 //! * `cargo xtask qemu`  — the QEMU replay of the 200 Hz loop with bit-exact host parity, fault
 //!   checks and budgets (see `qemu.rs`).
 
+mod board;
 mod elf;
 mod qemu;
 mod vector;
@@ -23,7 +26,8 @@ fn main() -> Result<()> {
         "ci" => ci(),
         "smoke" => smoke(),
         "qemu" => qemu::qemu(),
-        _ => bail!("usage: cargo xtask <ci|smoke|qemu>"),
+        "board" => board::board(),
+        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board>"),
     }
 }
 
@@ -46,6 +50,8 @@ fn ci() -> Result<()> {
         "--workspace",
         "--exclude",
         "tcomp-firmware",
+        "--exclude",
+        "tcomp-board-stm32f4",
         "--all-targets",
         "--",
         "-D",
@@ -65,9 +71,21 @@ fn ci() -> Result<()> {
         "-D",
         "warnings",
     ])?;
-    cargo(&["test", "--workspace", "--exclude", "tcomp-firmware"])?;
+    // The firmware's library (the loop) has host tests; its binaries are target-only.
+    let firmware_lib = ["-p", "tcomp-firmware", "--lib", "--tests"];
+    cargo(&[&["clippy"][..], &firmware_lib, &["--", "-D", "warnings"]].concat())?;
+    cargo(&[
+        "test",
+        "--workspace",
+        "--exclude",
+        "tcomp-firmware",
+        "--exclude",
+        "tcomp-board-stm32f4",
+    ])?;
+    cargo(&["test", "-p", "tcomp-firmware", "--lib"])?;
     cargo(&["build", "-p", "tcomp-core", "--target", TARGET, "--release"])?;
     cargo(&["build", "-p", "tcomp-hal", "--target", TARGET, "--release"])?;
+    board::board()?;
     smoke()?;
     qemu::qemu()
 }

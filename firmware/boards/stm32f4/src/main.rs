@@ -1,0 +1,202 @@
+//! The compensation loop on an STM32F407 IMU board, as an RTIC 2 application.
+//!
+//! * `sample` — bound to TIM2's update interrupt (200 Hz), the highest priority: latches the counter
+//!   block's snapshot, reads the thermometers, runs [`App::sample_snapshot`] (the very loop the
+//!   host tests and the QEMU replay run), encodes one [`Frame`] into the UART queue, feeds the
+//!   watchdog and counts overruns (TIM2's update flag set again before the work is done); the
+//!   next frame, the late one, carries `OVERRUN` on every channel.
+//! * `uart` — bound to USART1 at a lower priority: drains the queue one byte per TXE interrupt.
+//!   A frame that does not fit in the queue is dropped whole; its sequence number is still used, so
+//!   the host sees the gap.
+//!
+//! Logs go out with defmt over RTT (read by `probe-rs run`; without a probe they cost a buffer
+//! write). A panic or HardFault is recorded in no-init RAM and resets the chip ([`fault`]); the
+//! next boot reports it.
+#![no_std]
+#![no_main]
+
+mod fault;
+mod setup;
+
+use defmt_rtt as _;
+
+unsafe extern "C" {
+    static __models_start: u8;
+    static __models_end: u8;
+}
+
+/// The model-blob image region of `memory.x` (flash sector 11).
+fn models_image() -> &'static [u8] {
+    let start = core::ptr::addr_of!(__models_start);
+    let end = core::ptr::addr_of!(__models_end);
+    let len = (end as usize).saturating_sub(start as usize);
+    // SAFETY: the linker symbols bound flash sector 11, which is always readable and which the
+    // firmware never writes; an erased sector reads 0xFF, which the image reader rejects.
+    unsafe { core::slice::from_raw_parts(start, len) }
+}
+
+/// Bytes the UART queue holds (511 usable): six 84-byte six-channel frames. At 921,600
+/// baud one frame takes 0.9 ms, so the queue never fills unless the line is stalled.
+const TX_QUEUE: usize = 512;
+
+#[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
+mod app {
+    use embedded_hal_bus::util::AtomicCell;
+    use heapless::spsc::{Consumer, Producer, Queue};
+    use stm32f4xx_hal::pac::Interrupt;
+    use stm32f4xx_hal::prelude::*;
+    use stm32f4xx_hal::serial::{TxISR, TxListen};
+    use stm32f4xx_hal::timer::Flag;
+    use tcomp_core::frame::MAX_FRAME_LEN;
+    use tcomp_firmware::app::{App, IMU6, MAX_CHANNELS, Record, status};
+
+    use crate::setup::{self, Counters, FrameTx, SampleTimer, Spi1Bus, TICK_HZ, TICKS_PER_PERIOD};
+    use stm32f4xx_hal::watchdog::IndependentWatchdog;
+
+    #[shared]
+    struct Shared {}
+
+    #[local]
+    struct Local {
+        app: App<'static>,
+        thermometers: [setup::Thermometer; setup::THERMOMETERS],
+        counters: Counters,
+        timer: SampleTimer,
+        watchdog: IndependentWatchdog,
+        producer: Producer<'static, u8>,
+        consumer: Consumer<'static, u8>,
+        tx: FrameTx,
+    }
+
+    #[init(local = [
+        queue: Queue<u8, { crate::TX_QUEUE }> = Queue::new(),
+        spi1: Option<AtomicCell<Spi1Bus>> = None,
+    ])]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        let devices = match setup::setup(cx.core, cx.device, cx.local.spi1) {
+            Ok(d) => d,
+            Err(e) => {
+                defmt::error!("setup failed: {}", e);
+                // Nothing can run; the reset cause on the next boot says the watchdog was never fed
+                // only if it was started, so reset explicitly.
+                cortex_m::peripheral::SCB::sys_reset();
+            }
+        };
+        defmt::info!("reset cause: {}", devices.reset_cause);
+        if let Some((f, kind)) = devices.fault.and_then(|f| Some((f, f.valid()?))) {
+            defmt::error!(
+                "previous run ended in {} at {=str}:{=u32} (lr {=u32:#010x}; for a HardFault the \
+                 number is the PC)",
+                kind,
+                f.file(),
+                f.line_or_pc(),
+                f.lr()
+            );
+        }
+        let mut app = App::new(&IMU6);
+        let loaded = app.load(crate::models_image());
+        for (cfg, r) in IMU6.iter().zip(loaded.iter()) {
+            match r {
+                Ok(()) => defmt::info!("channel {=str}: model loaded", cfg.name),
+                Err(e) => defmt::warn!(
+                    "channel {=str}: no model ({}), raw passed through",
+                    cfg.name,
+                    e
+                ),
+            }
+        }
+        // The DRDY lines stay configured as inputs; the loop reads each ADS1220's latest continuous
+        // conversion without waiting for them.
+        let _ = devices.drdy;
+        let (producer, consumer) = cx.local.queue.split();
+        (
+            Shared {},
+            Local {
+                app,
+                thermometers: devices.thermometers,
+                counters: devices.counters,
+                timer: devices.timer,
+                watchdog: devices.watchdog,
+                producer,
+                consumer,
+                tx: devices.tx,
+            },
+        )
+    }
+
+    #[idle]
+    fn idle(_: idle::Context) -> ! {
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    /// One loop period, on TIM2's update.
+    #[task(binds = TIM2, priority = 2, local = [
+        app, thermometers, counters, timer, watchdog, producer,
+        sequence: u32 = 0, periods: u64 = 0, overruns: u32 = 0, dropped: u32 = 0, late: bool = false,
+    ])]
+    fn sample(cx: sample::Context) {
+        let l = cx.local;
+        l.timer.clear_flags(Flag::Update);
+        *l.periods += 1;
+
+        let mut records = [Record::default(); MAX_CHANNELS];
+        l.app
+            .sample_snapshot(l.thermometers, l.counters, &mut records);
+
+        if *l.late {
+            // The previous period overran: this sample was taken late.
+            for r in &mut records {
+                r.status |= status::OVERRUN;
+            }
+        }
+        let frame = l.app.frame(
+            *l.sequence,
+            l.periods.wrapping_mul(u64::from(TICKS_PER_PERIOD)),
+            TICK_HZ,
+            &records,
+        );
+        *l.sequence = l.sequence.wrapping_add(1);
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        if let Ok(len) = frame.encode(&mut buf) {
+            let free = l.producer.capacity() - l.producer.len();
+            if free >= len {
+                for &b in buf.get(..len).unwrap_or(&[]) {
+                    let _ = l.producer.enqueue(b);
+                }
+                rtic::pend(Interrupt::USART1);
+            } else {
+                *l.dropped = l.dropped.wrapping_add(1);
+            }
+        }
+
+        l.watchdog.feed();
+        *l.late = l.timer.flags().contains(Flag::Update);
+        if *l.late {
+            *l.overruns = l.overruns.wrapping_add(1);
+            defmt::warn!(
+                "overrun {=u32}: a period took longer than 5 ms",
+                *l.overruns
+            );
+        }
+    }
+
+    /// Drains the frame queue into USART1, one byte per TXE.
+    #[task(binds = USART1, priority = 1, local = [tx, consumer])]
+    fn uart(cx: uart::Context) {
+        let tx = cx.local.tx;
+        while tx.is_tx_empty() {
+            match cx.local.consumer.dequeue() {
+                Some(b) => {
+                    let _ = tx.write(b);
+                }
+                None => {
+                    tx.unlisten();
+                    return;
+                }
+            }
+        }
+        tx.listen();
+    }
+}

@@ -1,0 +1,223 @@
+//! The board: clocks, pins and peripherals of the STM32F407 IMU board, configured once and returned
+//! as one typed [`Devices`] struct (quartiq/stabilizer's shape). Nothing here runs per sample.
+//!
+//! | what | peripheral | pins | settings |
+//! |---|---|---|---|
+//! | clocks | RCC | 8 MHz crystal on OSC_IN/OSC_OUT (HSE) | SYSCLK 168 MHz (PLL), APB1 42 MHz, APB2 84 MHz |
+//! | sample timer | TIM2 (32-bit) | — | 1 MHz tick, update every 5,000 ticks (200 Hz) |
+//! | thermometers | SPI1, 12 × ADS1220 | SCK PA5, MISO PA6, MOSI PA7; CS PE0–PE11; DRDY PD0–PD11 (inputs) | mode 1, ≤ 5 MHz |
+//! | counter block | SPI2, FPGA | SCK PB13, MISO PB14, MOSI PB15, CS PB12 | mode 0, ≤ 10 MHz |
+//! | frames out | USART1 TX | PA9 | 921,600 baud 8N1 |
+//! | watchdog | IWDG | — | 50 ms (ten periods) |
+//!
+//! Thermometers 0–8 are the RLGs' (anode, cathode, shell of x, y, z), 9–11 the QMAs', as
+//! `tcomp_firmware::app::IMU6` expects; counter-block channels 0–2 the RLGs, 3–5 the QMAs.
+//! A device that does not answer at start-up is logged and left as it is: its reads fail every
+//! sample and the loop flags its channels `SENSOR_ERROR`, while the other channels run.
+
+use embedded_hal::spi::{MODE_0, MODE_1};
+use embedded_hal_bus::spi::{AtomicDevice, ExclusiveDevice, NoDelay};
+use embedded_hal_bus::util::AtomicCell;
+use stm32f4xx_hal::gpio::{AnyPin, Input, Output, PB12};
+use stm32f4xx_hal::pac::{self, SPI1, SPI2, TIM2, USART1};
+use stm32f4xx_hal::prelude::*;
+use stm32f4xx_hal::rcc::Config;
+use stm32f4xx_hal::serial::{self, Tx};
+use stm32f4xx_hal::spi::Spi;
+use stm32f4xx_hal::timer::{CounterUs, Event};
+use stm32f4xx_hal::watchdog::IndependentWatchdog;
+use tcomp_hal::ads1220::{Ads1220, Config as AdcConfig, Gain, IdacCurrent, RtdThermometer};
+use tcomp_hal::pulse_counter::CounterBlock;
+use tcomp_hal::rtd::Rtd;
+
+use crate::fault::{self, ResetCause};
+
+/// Crystal frequency.
+pub const HSE_HZ: u32 = 8_000_000;
+/// Core clock.
+pub const SYSCLK_HZ: u32 = 168_000_000;
+/// Tick rate of the sample timer: the unit of the frames' timestamps.
+pub const TICK_HZ: u32 = 1_000_000;
+/// Sample-timer ticks per loop period (200 Hz).
+pub const TICKS_PER_PERIOD: u32 = 5_000;
+/// Thermometers on SPI1.
+pub const THERMOMETERS: usize = 12;
+/// Counter-block channels used.
+pub const COUNTERS: usize = 6;
+/// UART baud rate.
+pub const BAUD: u32 = 921_600;
+/// Watchdog timeout.
+pub const WATCHDOG_MS: u32 = 50;
+/// PT100 reference resistor on each ADS1220, Ω.
+pub const R_REF_OHM: f32 = 1620.0;
+
+/// The thermometers' shared bus.
+pub type Spi1Bus = Spi<SPI1>;
+/// One thermometer: an ADS1220 measuring a 4-wire PT100, sharing SPI1 (an [`AtomicCell`]: the
+/// devices move into the sample task, so the bus must be `Sync`; a read while another holds it
+/// fails with `Busy` instead of corrupting it — it never happens, one task reads them all).
+pub type Thermometer = RtdThermometer<AtomicDevice<'static, Spi1Bus, AnyPin<Output>, NoDelay>>;
+/// The counter block on SPI2.
+pub type Counters = CounterBlock<ExclusiveDevice<Spi<SPI2>, PB12<Output>, NoDelay>, COUNTERS>;
+/// The 200 Hz sample timer.
+pub type SampleTimer = CounterUs<TIM2>;
+/// The frame output.
+pub type FrameTx = Tx<USART1>;
+
+/// Everything the application uses, configured.
+pub struct Devices {
+    /// Thermometers, in the configuration's order.
+    pub thermometers: [Thermometer; THERMOMETERS],
+    /// DRDY lines of the ADS1220s (inputs; the continuous 20 SPS conversions are read as they are).
+    pub drdy: [AnyPin<Input>; THERMOMETERS],
+    /// The counter block.
+    pub counters: Counters,
+    /// The sample timer, running, update interrupt enabled.
+    pub timer: SampleTimer,
+    /// The frame output.
+    pub tx: FrameTx,
+    /// The independent watchdog, started.
+    pub watchdog: IndependentWatchdog,
+    /// Why the chip last reset.
+    pub reset_cause: ResetCause,
+    /// The fault the previous run recorded, if any.
+    pub fault: Option<tcomp_firmware::fault::FaultRecord>,
+}
+
+/// What can stop the board from starting at all.
+#[derive(Clone, Copy, Debug, defmt::Format)]
+pub enum SetupError {
+    /// The UART rejected its configuration.
+    Uart,
+    /// The sample timer rejected its period.
+    Timer,
+}
+
+/// Configures the board. `spi1` is the static home of the thermometers' shared bus.
+pub fn setup(
+    core: cortex_m::Peripherals,
+    dp: pac::Peripherals,
+    spi1: &'static mut Option<AtomicCell<Spi1Bus>>,
+) -> Result<Devices, SetupError> {
+    let reset_cause = fault::reset_cause(&dp.RCC);
+    let fault = fault::take();
+    let mut rcc = dp.RCC.freeze(
+        Config::hse(HSE_HZ.Hz())
+            .sysclk(SYSCLK_HZ.Hz())
+            .pclk1(42.MHz())
+            .pclk2(84.MHz()),
+    );
+    let mut delay = core.SYST.delay(&rcc.clocks);
+
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let gpiob = dp.GPIOB.split(&mut rcc);
+    let gpiod = dp.GPIOD.split(&mut rcc);
+    let gpioe = dp.GPIOE.split(&mut rcc);
+
+    // Thermometers: SPI1, mode 1, one chip select each (high = deselected before the bus runs).
+    let bus = dp.SPI1.spi(
+        (Some(gpioa.pa5), Some(gpioa.pa6), Some(gpioa.pa7)),
+        MODE_1,
+        5.MHz(),
+        &mut rcc,
+    );
+    let bus: &'static AtomicCell<Spi1Bus> = spi1.insert(AtomicCell::new(bus));
+    let cs: [AnyPin<Output>; THERMOMETERS] = [
+        gpioe.pe0.into_push_pull_output().erase(),
+        gpioe.pe1.into_push_pull_output().erase(),
+        gpioe.pe2.into_push_pull_output().erase(),
+        gpioe.pe3.into_push_pull_output().erase(),
+        gpioe.pe4.into_push_pull_output().erase(),
+        gpioe.pe5.into_push_pull_output().erase(),
+        gpioe.pe6.into_push_pull_output().erase(),
+        gpioe.pe7.into_push_pull_output().erase(),
+        gpioe.pe8.into_push_pull_output().erase(),
+        gpioe.pe9.into_push_pull_output().erase(),
+        gpioe.pe10.into_push_pull_output().erase(),
+        gpioe.pe11.into_push_pull_output().erase(),
+    ];
+    let drdy: [AnyPin<Input>; THERMOMETERS] = [
+        gpiod.pd0.into_pull_up_input().erase(),
+        gpiod.pd1.into_pull_up_input().erase(),
+        gpiod.pd2.into_pull_up_input().erase(),
+        gpiod.pd3.into_pull_up_input().erase(),
+        gpiod.pd4.into_pull_up_input().erase(),
+        gpiod.pd5.into_pull_up_input().erase(),
+        gpiod.pd6.into_pull_up_input().erase(),
+        gpiod.pd7.into_pull_up_input().erase(),
+        gpiod.pd8.into_pull_up_input().erase(),
+        gpiod.pd9.into_pull_up_input().erase(),
+        gpiod.pd10.into_pull_up_input().erase(),
+        gpiod.pd11.into_pull_up_input().erase(),
+    ];
+    let mut thermometers = cs.map(|mut pin| {
+        pin.set_high();
+        // `new_no_delay` only drives CS high, which cannot fail on this pin (`Infallible`).
+        let device = match AtomicDevice::new_no_delay(bus, pin) {
+            Ok(d) => d,
+            Err(e) => match e {},
+        };
+        let adc = Ads1220::new(device, AdcConfig::rtd_4wire(IdacCurrent::Ua1000, Gain::G4));
+        RtdThermometer::new(adc, Rtd::PT100, R_REF_OHM)
+    });
+    for (i, t) in thermometers.iter_mut().enumerate() {
+        if let Err(e) = t.init(&mut delay) {
+            defmt::warn!(
+                "thermometer {=usize}: init failed ({}), its channels will flag SENSOR_ERROR",
+                i,
+                defmt::Debug2Format(&e)
+            );
+        }
+    }
+
+    // Counter block: SPI2, mode 0.
+    let spi2 = dp.SPI2.spi(
+        (Some(gpiob.pb13), Some(gpiob.pb14), Some(gpiob.pb15)),
+        MODE_0,
+        10.MHz(),
+        &mut rcc,
+    );
+    let mut cs2 = gpiob.pb12.into_push_pull_output();
+    cs2.set_high();
+    let device = match ExclusiveDevice::new_no_delay(spi2, cs2) {
+        Ok(d) => d,
+        Err(e) => match e {},
+    };
+    let mut counters = CounterBlock::new(device);
+    match counters.init() {
+        Ok(info) => defmt::info!("counter block: {}", info),
+        Err(e) => defmt::warn!(
+            "counter block: init failed ({}), counter channels will flag SENSOR_ERROR",
+            defmt::Debug2Format(&e)
+        ),
+    }
+
+    let tx = dp
+        .USART1
+        .tx(
+            gpioa.pa9,
+            serial::Config::default().baudrate(BAUD.bps()),
+            &mut rcc,
+        )
+        .map_err(|_| SetupError::Uart)?;
+
+    let mut timer = dp.TIM2.counter_us(&mut rcc);
+    timer
+        .start(TICKS_PER_PERIOD.micros())
+        .map_err(|_| SetupError::Timer)?;
+    timer.listen(Event::Update);
+
+    let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+    watchdog.start(WATCHDOG_MS.millis());
+
+    Ok(Devices {
+        thermometers,
+        drdy,
+        counters,
+        timer,
+        tx,
+        watchdog,
+        reset_cause,
+        fault,
+    })
+}

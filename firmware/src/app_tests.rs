@@ -1,0 +1,313 @@
+//! The loop's counter handling against the real counter-block driver on a mock SPI bus: a flagged
+//! interval is consumed (NaN + SENSOR_ERROR, the next interval is one period), a bus error is not
+//! (the next good read covers both periods).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+extern crate std;
+
+use super::*;
+use embedded_hal::spi::{
+    ErrorKind as SpiErrorKind, ErrorType as SpiErrorType, Operation, SpiDevice,
+};
+use embedded_hal_mock::eh1::spi::{Mock, Transaction as Tx};
+use std::{vec, vec::Vec};
+use tcomp_hal::pulse_counter::{CounterBlock, ID_VALUE, status as block_status};
+
+/// INFO: 8 channels, 32-bit counters, 10 MHz timestamp clock.
+const INFO: u32 = 0x2710_2008;
+/// Timestamp ticks per loop period at 10 MHz.
+const TICKS: u32 = 50_000;
+
+fn frame(ops: Vec<Tx<u8>>) -> Vec<Tx<u8>> {
+    let mut v = vec![Tx::transaction_start()];
+    v.extend(ops);
+    v.push(Tx::transaction_end());
+    v
+}
+
+fn id_frame() -> Vec<Tx<u8>> {
+    let mut data = ID_VALUE.to_be_bytes().to_vec();
+    data.extend(INFO.to_be_bytes());
+    frame(vec![Tx::write_vec(vec![0x80]), Tx::read_vec(data)])
+}
+
+/// `[LATCH, READ | STATUS]` then STATUS, TIMESTAMP, COUNT[..].
+fn snapshot(status: u32, timestamp: u32, counts: &[u32]) -> Vec<Tx<u8>> {
+    let mut data = status.to_be_bytes().to_vec();
+    data.extend(timestamp.to_be_bytes());
+    for c in counts {
+        data.extend(c.to_be_bytes());
+    }
+    frame(vec![Tx::write_vec(vec![0x01, 0x82]), Tx::read_vec(data)])
+}
+
+/// Fails the `fail_on`-th transaction before it reaches the mock (a bus fault before chip select).
+struct FailAt<S> {
+    inner: S,
+    fail_on: usize,
+    count: usize,
+}
+
+impl<S> SpiErrorType for FailAt<S> {
+    type Error = SpiErrorKind;
+}
+
+impl<S: SpiDevice<Error = SpiErrorKind>> SpiDevice for FailAt<S> {
+    fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), SpiErrorKind> {
+        let n = self.count;
+        self.count += 1;
+        if n == self.fail_on {
+            return Err(SpiErrorKind::Other);
+        }
+        self.inner.transaction(operations)
+    }
+}
+
+/// A thermometer that always reads 25 °C.
+struct Fixed;
+
+impl tcomp_hal::ErrorType for Fixed {
+    type Error = ErrorKind;
+}
+
+impl Thermometer for Fixed {
+    fn read_celsius(&mut self) -> Result<f32, ErrorKind> {
+        Ok(25.0)
+    }
+}
+
+fn thermometers() -> [Fixed; MAX_THERMOMETERS] {
+    core::array::from_fn(|_| Fixed)
+}
+
+/// The raw value the loop must report for `counts` pulses over one period on channel `k` of IMU6
+/// (no model: the raw value is passed through).
+fn one_period(k: usize, counts: i32) -> f32 {
+    IMU6[k].scale.rate(counts, PERIOD_S).unwrap()
+}
+
+#[test]
+fn flagged_interval_is_consumed_through_a_pulse_counter_handle() {
+    // One RLG counter (channel 0 of a one-channel block): 1000 pulses per period, i.e. 2 °/h at
+    // 1e-5 arcsec per pulse; the second interval is flagged LOST.
+    let mut e = id_frame();
+    e.extend(snapshot(0, 0, &[0]));
+    e.extend(snapshot(0, TICKS, &[1_000]));
+    e.extend(snapshot(1 << block_status::LOST_SHIFT, 2 * TICKS, &[1_900]));
+    e.extend(snapshot(0, 3 * TICKS, &[2_900]));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 1> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    let mut app = App::new(&IMU6);
+    let mut therms = thermometers();
+    let mut out = [Record::default(); MAX_CHANNELS];
+    let mut counters = [&mut block];
+
+    app.sample(&mut therms, &mut counters, &mut out);
+    assert_eq!(out[0].compensated, one_period(0, 1_000));
+    assert!(
+        (out[0].compensated - 2.0).abs() < 1e-5,
+        "{}",
+        out[0].compensated
+    );
+    assert_eq!(out[0].status, status::NO_MODEL);
+
+    app.sample(&mut therms, &mut counters, &mut out);
+    assert!(out[0].compensated.is_nan());
+    assert_eq!(out[0].status & status::SENSOR_ERROR, status::SENSOR_ERROR);
+
+    // The flagged interval was consumed: the next one is one period of 1000 pulses, not two.
+    app.sample(&mut therms, &mut counters, &mut out);
+    assert_eq!(out[0].compensated, one_period(0, 1_000));
+    assert_eq!(out[0].status, status::NO_MODEL);
+    spi.done();
+}
+
+#[test]
+fn bus_error_carries_the_interval_to_the_next_read() {
+    let mut e = id_frame();
+    e.extend(snapshot(0, 0, &[0]));
+    e.extend(snapshot(0, TICKS, &[1_000]));
+    // Transaction 3 (the second sample) fails on the bus before reaching the mock.
+    e.extend(snapshot(0, 3 * TICKS, &[3_000]));
+    let mut spi = Mock::new(&e);
+    let bus = FailAt {
+        inner: spi.clone(),
+        fail_on: 3,
+        count: 0,
+    };
+    let mut block: CounterBlock<_, 1> = CounterBlock::new(bus);
+    block.init().unwrap();
+    let mut app = App::new(&IMU6);
+    let mut therms = thermometers();
+    let mut out = [Record::default(); MAX_CHANNELS];
+    let mut counters = [&mut block];
+
+    app.sample(&mut therms, &mut counters, &mut out);
+    assert_eq!(out[0].compensated, one_period(0, 1_000));
+    app.sample(&mut therms, &mut counters, &mut out);
+    assert!(out[0].compensated.is_nan());
+    assert_eq!(out[0].status & status::SENSOR_ERROR, status::SENSOR_ERROR);
+    // 2000 pulses over the two periods since the last good read: the same 2 °/h.
+    app.sample(&mut therms, &mut counters, &mut out);
+    assert_eq!(
+        out[0].compensated,
+        IMU6[0].scale.rate(2_000, 2.0 * PERIOD_S).unwrap()
+    );
+    assert!(
+        (out[0].compensated - 2.0).abs() < 1e-5,
+        "{}",
+        out[0].compensated
+    );
+    assert_eq!(out[0].status, status::NO_MODEL);
+    spi.done();
+}
+
+#[test]
+fn one_snapshot_per_sample_and_a_flagged_channel_alone() {
+    // Six channels latched by one frame per sample; channel 4 (QMA y) is flagged FAULT in the
+    // second interval, and channel 1 (RLG y) LOST in the third.
+    let per_period: [u32; 6] = [1_000, 2_000, 3_000, 400, 500, 600];
+    let at = |n: u32| -> Vec<u32> { per_period.iter().map(|p| p * n).collect() };
+    let mut e = id_frame();
+    e.extend(snapshot(0, 0, &at(0)));
+    e.extend(snapshot(0, TICKS, &at(1)));
+    e.extend(snapshot(
+        1 << (block_status::FAULT_SHIFT + 4),
+        2 * TICKS,
+        &at(2),
+    ));
+    e.extend(snapshot(
+        1 << (block_status::LOST_SHIFT + 1),
+        3 * TICKS,
+        &at(3),
+    ));
+    e.extend(snapshot(0, 4 * TICKS, &at(4)));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 6> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    let mut app = App::new(&IMU6);
+    let mut therms = thermometers();
+    let mut out = [Record::default(); MAX_CHANNELS];
+
+    let flagged_at = [None, None, Some(4), Some(1), None];
+    for flagged in flagged_at.iter().skip(1) {
+        app.sample_snapshot(&mut therms, &mut block, &mut out);
+        for (k, rec) in out.iter().enumerate() {
+            if Some(k) == *flagged {
+                assert!(rec.compensated.is_nan(), "channel {k}");
+                assert_eq!(rec.status, status::NO_MODEL | status::SENSOR_ERROR);
+            } else {
+                let expected = one_period(k, per_period[k] as i32);
+                assert_eq!(rec.compensated, expected, "channel {k}");
+                assert_eq!(rec.status, status::NO_MODEL, "channel {k}");
+            }
+        }
+    }
+    spi.done();
+}
+
+#[test]
+fn precise_value_keeps_the_pulse_resolution_at_high_rates() {
+    // 360,000 °/h on an RLG at 1e-5 arcsec per pulse is
+    // 1.8e8 pulses per 5 ms period. One pulse more must show in the frame's value, not in the f32.
+    let counts = 180_000_000i32;
+    let mut e = id_frame();
+    e.extend(snapshot(0, 0, &[0]));
+    e.extend(snapshot(0, TICKS, &[counts as u32]));
+    e.extend(snapshot(0, 2 * TICKS, &[2 * counts as u32 + 1]));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 1> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    let mut app = App::new(&IMU6);
+    let mut therms = thermometers();
+    let mut out = [Record::default(); MAX_CHANNELS];
+    let mut counters = [&mut block];
+
+    app.sample(&mut therms, &mut counters, &mut out);
+    let a = app.precise_value(0, &out[0]);
+    let f32_a = out[0].compensated;
+    app.sample(&mut therms, &mut counters, &mut out);
+    let b = app.precise_value(0, &out[0]);
+    let f32_b = out[0].compensated;
+    // The exact rate of one pulse per period, °/h (arcsec/s).
+    let pulse = f64::from(RLG_ARCSEC_PER_PULSE) / f64::from(PERIOD_S);
+    assert!((a - 360_000.0).abs() < 0.1, "{a}");
+    assert!(
+        ((b - a) - pulse).abs() < 1e-6 * pulse,
+        "{} vs {pulse}",
+        b - a
+    );
+    // The f32 output cannot tell them apart.
+    assert_eq!(f32_a, f32_b);
+    // No valid count: NaN.
+    let flagged = Record {
+        compensated: f32::NAN,
+        periods: 0,
+        ..out[0]
+    };
+    assert!(app.precise_value(0, &flagged).is_nan());
+    spi.done();
+}
+
+#[test]
+fn frames_of_the_loop_decode_to_its_outputs() {
+    // What the board does every period, on the host: latch, step, frame, encode; then the host's
+    // decoder. Channel 2 is flagged in the second interval.
+    let per_period: [u32; 6] = [1_000, 2_000, 3_000, 400, 500, 600];
+    let at = |n: u32| -> Vec<u32> { per_period.iter().map(|p| p * n).collect() };
+    let mut e = id_frame();
+    e.extend(snapshot(0, 0, &at(0)));
+    e.extend(snapshot(0, TICKS, &at(1)));
+    e.extend(snapshot(
+        1 << (block_status::LOST_SHIFT + 2),
+        2 * TICKS,
+        &at(2),
+    ));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 6> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    let mut app = App::new(&IMU6);
+    let mut therms = thermometers();
+    let mut out = [Record::default(); MAX_CHANNELS];
+    let mut wire = Vec::new();
+    let mut sent = Vec::new();
+    for seq in 0..2u32 {
+        app.sample_snapshot(&mut therms, &mut block, &mut out);
+        let frame = app.frame(seq, u64::from(seq + 1) * 5_000, 1_000_000, &out);
+        let mut buf = [0u8; tcomp_core::frame::MAX_FRAME_LEN];
+        let n = frame.encode(&mut buf).unwrap();
+        wire.extend_from_slice(&buf[..n]);
+        sent.push(out);
+    }
+    let mut decoder = tcomp_core::frame::Decoder::new();
+    let mut got = Vec::new();
+    decoder.feed(&wire, |f| got.push(f));
+    assert_eq!(got.len(), 2);
+    for (f, recs) in got.iter().zip(&sent) {
+        assert_eq!(f.channels().len(), IMU6.len());
+        for (k, (c, rec)) in f.channels().iter().zip(recs).enumerate() {
+            assert_eq!(c.status, rec.status, "channel {k}");
+            let expected = app.precise_value(k, rec);
+            if expected.is_nan() {
+                assert_eq!(c.value.to_bits(), tcomp_core::frame::CANONICAL_NAN_BITS);
+            } else {
+                assert_eq!(c.value, expected, "channel {k}");
+                // The f64 value is the exact count over one period (no model: no correction).
+                let exact = f64::from(per_period[k]) * f64::from(IMU6[k].scale.per_pulse())
+                    / f64::from(PERIOD_S);
+                assert!(
+                    (c.value - exact).abs() <= 1e-12 * exact.abs(),
+                    "channel {k}"
+                );
+            }
+        }
+    }
+    assert!(got[1].channels()[2].value.is_nan());
+    assert_eq!(
+        got[1].channels()[2].status,
+        status::NO_MODEL | status::SENSOR_ERROR
+    );
+    assert_eq!(got[1].time_s(), 0.01);
+    spi.done();
+}

@@ -1,0 +1,122 @@
+//! `tcomp frames FILE [--json]`: decode a capture of the firmware's serial output into CSV (or JSON).
+//!
+//! The capture is the raw byte stream of the UART (e.g. `cat /dev/ttyUSB0 > capture.bin`): it may
+//! start mid-frame and hold garbage or damaged frames; the core's streaming [`Decoder`] drops those
+//! and counts them, and the counts go to stderr (CSV) or into the JSON. One implementation of the
+//! format, `tcomp_core::frame`, is used by the firmware and by this command.
+use anyhow::Context;
+use clap::Args as ClapArgs;
+use serde_json::json;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use tcomp_core::frame::{Decoder, Frame, Stats, status};
+
+/// Arguments of `tcomp frames`.
+#[derive(ClapArgs)]
+pub struct Args {
+    /// The captured byte stream.
+    pub file: PathBuf,
+    /// Print JSON (frames and decoder counts) instead of CSV.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The status word as names joined by `+` (`ok` when zero; unnamed bits as `bit<n>`).
+pub fn status_names(word: u16) -> String {
+    let mut out = String::new();
+    status::for_each_name(word, |n| {
+        if !out.is_empty() {
+            out.push('+');
+        }
+        match n {
+            Ok(name) => out.push_str(name),
+            Err(bit) => {
+                let _ = write!(out, "bit{bit}");
+            }
+        }
+    });
+    if out.is_empty() {
+        out.push_str("ok");
+    }
+    out
+}
+
+fn stats_json(s: &Stats) -> serde_json::Value {
+    json!({
+        "frames": s.frames,
+        "lost": s.lost,
+        "corrupt": s.corrupt,
+        "skipped_bytes": s.skipped,
+        "restarts": s.restarts,
+    })
+}
+
+fn csv(frames: &[Frame]) -> String {
+    let width = frames.iter().map(|f| f.channels().len()).max().unwrap_or(0);
+    let mut out = String::from("time_s,sequence");
+    for k in 0..width {
+        let _ = write!(out, ",ch{k}_value,ch{k}_status");
+    }
+    out.push('\n');
+    for f in frames {
+        let _ = write!(out, "{},{}", f.time_s(), f.sequence);
+        for k in 0..width {
+            match f.channels().get(k) {
+                Some(c) => {
+                    let _ = write!(out, ",{},{}", c.value, status_names(c.status));
+                }
+                None => out.push_str(",,"),
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Runs the command.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let bytes =
+        std::fs::read(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
+    let mut decoder = Decoder::new();
+    let mut frames = Vec::new();
+    decoder.feed(&bytes, |f| frames.push(f));
+    let stats = decoder.stats();
+    if args.json {
+        let list: Vec<_> = frames
+            .iter()
+            .map(|f| {
+                let channels: Vec<_> = f
+                    .channels()
+                    .iter()
+                    .map(|c| {
+                        json!({
+                            "value": c.value.is_finite().then_some(c.value),
+                            "status": c.status,
+                            "status_names": status_names(c.status),
+                        })
+                    })
+                    .collect();
+                json!({
+                    "sequence": f.sequence,
+                    "timestamp": f.timestamp,
+                    "tick_hz": f.tick_hz,
+                    "time_s": f.time_s(),
+                    "channels": channels,
+                })
+            })
+            .collect();
+        let value = json!({
+            "file": args.file.display().to_string(),
+            "stats": stats_json(&stats),
+            "frames": list,
+        });
+        println!("{}", serde_json::to_string_pretty(&value)?);
+    } else {
+        print!("{}", csv(&frames));
+        eprintln!(
+            "{} frames, {} lost (sequence gaps), {} corrupt (CRC), {} bytes skipped, {} restarts",
+            stats.frames, stats.lost, stats.corrupt, stats.skipped, stats.restarts
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,50 @@
+//! The STM32F407 board binary in CI: a release build, clippy with `-D warnings`, and its sizes
+//! against budgets derived from the part (no hardware here: this checks that it builds and fits).
+
+use anyhow::{Result, bail};
+use std::path::PathBuf;
+
+use crate::{TARGET, cargo};
+
+const PACKAGE: &str = "tcomp-board-stm32f4";
+const BIN: &str = "tcomp-stm32f4";
+/// Flash for the firmware: 1 MiB less sector 11 (128 KiB), which holds the model image.
+const FLASH_BUDGET: u64 = (1024 - 128) * 1024;
+/// Static RAM: SRAM1 + SRAM2 (the stack has the 64 KiB CCM RAM to itself).
+const STATIC_RAM_BUDGET: u64 = 128 * 1024;
+
+/// Builds and lints the board binary, prints `BOARD-SUMMARY …` and fails over budget.
+pub fn board() -> Result<()> {
+    let common = ["-p", PACKAGE, "--target", TARGET];
+    cargo(
+        &[
+            &["clippy"][..],
+            &common,
+            &["--release", "--", "-D", "warnings"],
+        ]
+        .concat(),
+    )?;
+    cargo(&[&["build"][..], &common, &["--release"]].concat())?;
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let target_dir =
+        std::env::var_os("CARGO_TARGET_DIR").map_or(root.join("target"), PathBuf::from);
+    let elf = target_dir.join(TARGET).join("release").join(BIN);
+    let sizes = crate::elf::sections(&elf)?;
+    let size = |n: &str| {
+        sizes
+            .iter()
+            .filter(|(s, _)| s == n)
+            .map(|(_, v)| *v)
+            .sum::<u64>()
+    };
+    let flash = size(".vector_table") + size(".text") + size(".rodata") + size(".data");
+    let static_ram = size(".data") + size(".bss") + size(".uninit");
+    println!(
+        "BOARD-SUMMARY {BIN}: flash {flash} B (budget {FLASH_BUDGET}), static RAM {static_ram} B \
+         (budget {STATIC_RAM_BUDGET})"
+    );
+    if flash > FLASH_BUDGET || static_ram > STATIC_RAM_BUDGET {
+        bail!("board binary over budget");
+    }
+    Ok(())
+}
