@@ -3,8 +3,8 @@
 //!
 //! Why a crate of its own: the demo's narrative (diagnose, print, render the report) lives in the
 //! tool (`host-tools/src/demo/`), above the analysis crate, so `tcomp-discover` needs no simulator.
-//! Its scenario must still be the one the discovery tests run (`hidden_shupe` diagnoses exactly the
-//! demo's runs), so the narrative cannot drift from what is tested. This crate sits below
+//! Its scenario must still be the one the discovery tests run (`hidden_shupe` diagnoses the demo's
+//! profiles and effects, with its own seed), so the narrative cannot drift from what is tested. This crate sits below
 //! `tcomp-discover` (it needs only the simulator and the trainer): the tool depends on it, and the
 //! analysis crate's tests and benchmark use it as a dev-dependency, without a cycle.
 
