@@ -1,6 +1,8 @@
 //! `tcomp`: the command-line tool around the compensation core.
 //!
 //! Each subcommand lives in its own module under `cmd/`; `main` only parses arguments and dispatches.
+//! What several commands show (candidate table, diagnosis text, HTML report) is written once in
+//! `render/`; the built-in demo's narrative is `demo/`.
 //!
 //! A user error is not a crash: `main` prints the error and its causes on one line (`error: …`) on
 //! stderr and exits with 1, whatever `RUST_BACKTRACE` says; bad usage exits with clap's 2. A panic
@@ -9,6 +11,8 @@
 //! error.
 
 mod cmd;
+mod demo;
+mod render;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

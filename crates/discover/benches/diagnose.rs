@@ -8,7 +8,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::time::Instant;
-use tcomp_discover::demo::{fit_features, simulated};
+use tcomp_demo::{fit_features, simulated};
 use tcomp_discover::{DiagnoseOptions, diagnose};
 
 fn main() {

@@ -186,63 +186,80 @@ pub fn generate(src: &Sources, existing: &[String]) -> Vec<Family> {
     let have: Vec<String> = existing.iter().map(|e| norm(e)).collect();
     let mut out = Vec::new();
     for t in &src.temperatures {
-        out.push(Family {
-            members: RATE_WINDOWS_S
-                .iter()
-                .map(|&w| Candidate {
-                    kind: EffectKind::Rate,
-                    effect: format!("rate of temperature d{t}/dt (window {} s)", num(w)),
-                    expressions: vec![if w == 60.0 {
-                        format!("rate({t})")
-                    } else {
-                        format!("rate({t}, {})", num(w))
-                    }],
-                    parameter: Some(w),
-                })
-                .collect(),
-        });
-        out.push(single(
-            EffectKind::Shupe,
-            format!("Shupe-type {t}·d{t}/dt"),
-            format!("{t} * rate({t})"),
-            None,
-        ));
-        out.push(single(
-            EffectKind::Square,
-            format!("curvature in temperature {t}²"),
-            format!("sq({t})"),
-            None,
-        ));
-        out.push(Family {
-            members: LAG_TAUS_S
-                .iter()
-                .map(|&tau| Candidate {
-                    kind: EffectKind::LaggedElement,
-                    effect: format!(
-                        "sensing element lags its thermometer {t}, τ ≈ {} min",
-                        num((tau / 60.0).round())
-                    ),
-                    expressions: vec![format!("lag({t}, {})", num(tau))],
-                    parameter: Some(tau),
-                })
-                .collect(),
-        });
-        out.push(Family {
-            members: HYST_THRESHOLDS
-                .iter()
-                .map(|&h| Candidate {
-                    kind: EffectKind::Hysteresis,
-                    effect: format!(
-                        "heating/cooling hysteresis of {t} (switches at ±{} per min)",
-                        num(h)
-                    ),
-                    expressions: vec![format!("hyst(rate({t}), {})", num(h))],
-                    parameter: Some(h),
-                })
-                .collect(),
-        });
+        temperature_families(t, &mut out);
     }
-    let th = &src.thermometers;
+    gradient_families(&src.thermometers, &mut out);
+    input_families(&src.inputs, &mut out);
+    for f in &mut out {
+        f.members
+            .retain(|m| !m.expressions.iter().any(|e| have.contains(&norm(e))));
+    }
+    out.retain(|f| !f.members.is_empty());
+    out
+}
+
+/// The effects of one temperature: rate (several windows), Shupe-type product, curvature, lagged
+/// element (several time constants), heating/cooling hysteresis (several thresholds).
+fn temperature_families(t: &str, out: &mut Vec<Family>) {
+    out.push(Family {
+        members: RATE_WINDOWS_S
+            .iter()
+            .map(|&w| Candidate {
+                kind: EffectKind::Rate,
+                effect: format!("rate of temperature d{t}/dt (window {} s)", num(w)),
+                expressions: vec![if w == 60.0 {
+                    format!("rate({t})")
+                } else {
+                    format!("rate({t}, {})", num(w))
+                }],
+                parameter: Some(w),
+            })
+            .collect(),
+    });
+    out.push(single(
+        EffectKind::Shupe,
+        format!("Shupe-type {t}·d{t}/dt"),
+        format!("{t} * rate({t})"),
+        None,
+    ));
+    out.push(single(
+        EffectKind::Square,
+        format!("curvature in temperature {t}²"),
+        format!("sq({t})"),
+        None,
+    ));
+    out.push(Family {
+        members: LAG_TAUS_S
+            .iter()
+            .map(|&tau| Candidate {
+                kind: EffectKind::LaggedElement,
+                effect: format!(
+                    "sensing element lags its thermometer {t}, τ ≈ {} min",
+                    num((tau / 60.0).round())
+                ),
+                expressions: vec![format!("lag({t}, {})", num(tau))],
+                parameter: Some(tau),
+            })
+            .collect(),
+    });
+    out.push(Family {
+        members: HYST_THRESHOLDS
+            .iter()
+            .map(|&h| Candidate {
+                kind: EffectKind::Hysteresis,
+                effect: format!(
+                    "heating/cooling hysteresis of {t} (switches at ±{} per min)",
+                    num(h)
+                ),
+                expressions: vec![format!("hyst(rate({t}), {})", num(h))],
+                parameter: Some(h),
+            })
+            .collect(),
+    });
+}
+
+/// Gradients between thermometers: each pair, and two gradients against a common thermometer.
+fn gradient_families(th: &[String], out: &mut Vec<Family>) {
     for (i, a) in th.iter().enumerate() {
         for b in th.iter().skip(i + 1) {
             out.push(single(
@@ -271,7 +288,11 @@ pub fn generate(src: &Sources, existing: &[String]) -> Vec<Family> {
             }
         }
     }
-    for c in &src.inputs {
+}
+
+/// Non-thermal inputs (a supply voltage by its name).
+fn input_families(inputs: &[String], out: &mut Vec<Family>) {
+    for c in inputs {
         let effect = if c.to_ascii_lowercase().contains("supply") || c.ends_with("_v") {
             format!("supply-voltage sensitivity ({c})")
         } else {
@@ -279,12 +300,6 @@ pub fn generate(src: &Sources, existing: &[String]) -> Vec<Family> {
         };
         out.push(single(EffectKind::NonThermal, effect, c.clone(), None));
     }
-    for f in &mut out {
-        f.members
-            .retain(|m| !m.expressions.iter().any(|e| have.contains(&norm(e))));
-    }
-    out.retain(|f| !f.members.is_empty());
-    out
 }
 
 #[cfg(test)]

@@ -6,7 +6,9 @@
 //! [`candidates`] (which effects could be missing, with physical names and ready expressions),
 //! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual),
 //! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`verdict`] (the stated
-//! criterion), [`report`] (self-contained HTML with SVG plots), [`demo`] (the built-in narrative).
+//! criterion). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
+//! in the tool (`host-tools/src/render/`, `host-tools/src/demo/`): this crate analyses, it does not
+//! print, and it needs no simulator.
 //!
 //! ```no_run
 //! use tcomp_discover::{DiagnoseOptions, diagnose};
@@ -20,9 +22,7 @@
 
 pub mod candidates;
 pub mod confirm;
-pub mod demo;
 pub mod error;
-pub mod report;
 pub mod score;
 pub mod segments;
 pub mod verdict;

@@ -6,8 +6,8 @@
 //! bins by the trainer, scored on 60 s bins.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+use tcomp_demo::{evaluate, fit_features, simulated};
 use tcomp_discover::candidates::EffectKind as Kind;
-use tcomp_discover::demo::{evaluate, fit_features, simulated};
 use tcomp_discover::{DiagnoseOptions, Verdict, diagnose};
 use tcomp_sim::{EffectKind, SensorKind, presets};
 
@@ -127,7 +127,7 @@ fn hidden_rate() {
 
 #[test]
 fn hidden_shupe() {
-    let p = tcomp_discover::demo::demo_preset(11).unwrap();
+    let p = tcomp_demo::demo_preset(11).unwrap();
     let o = case_preset(p, Some(Shupe));
     check_found(&o, Kind::Shupe);
 }

@@ -1,7 +1,7 @@
 //! `tcomp demo [--out DIR]`: the discovery loop on a simulated IFOG, no user data needed.
+use crate::demo::{DemoOptions, run as run_demo};
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
-use tcomp_discover::demo::{DemoOptions, run as run_demo};
 
 /// Arguments of `tcomp demo`.
 #[derive(ClapArgs, Debug)]

@@ -2,7 +2,7 @@
 //! which physical effect is most likely missing, with the evidence and a stated criterion.
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
-use tcomp_discover::{Analysis, DiagnoseOptions, Verdict};
+use tcomp_discover::{Analysis, DiagnoseOptions};
 use tcomp_train::Dataset;
 
 /// Arguments of `tcomp diagnose`.
@@ -73,108 +73,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         outln!("{}", super::printable::json(&json));
     } else {
         // The model's target, unit and features come from the blob: no raw control characters.
-        out!("{}", super::printable::lines(&text(&a, args.top)));
+        out!(
+            "{}",
+            super::printable::lines(&crate::render::diagnosis::text(&a, args.top))
+        );
     }
     Ok(())
-}
-
-/// The human-readable diagnosis.
-pub fn text(a: &Analysis, top: usize) -> String {
-    use std::fmt::Write as _;
-    let d = &a.diagnosis;
-    let u = &d.model.unit;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "model: {} ~ {}{}",
-        d.model.target,
-        d.model.features.join(", "),
-        if d.model.signals.is_empty() {
-            String::new()
-        } else {
-            format!("  (signals: {})", d.model.signals.join("; "))
-        }
-    );
-    let _ = writeln!(s, "\nWhere it fails (residual of the model as given):");
-    let seg = |s: &mut String, rows: &[tcomp_discover::segments::SegmentRow]| {
-        let _ = writeln!(
-            s,
-            "  {:<24} {:>9} {:>9} {:>12} {:>12} {:>12}",
-            "segment", "start s", "end s", "raw std", "resid std", "resid mean"
-        );
-        for r in rows {
-            let _ = writeln!(
-                s,
-                "  {:<24} {:>9.0} {:>9.0} {:>12.4e} {:>12.4e} {:>+12.4e}",
-                r.label, r.start_s, r.end_s, r.raw_std, r.residual_std, r.residual_mean
-            );
-        }
-    };
-    seg(&mut s, &d.segments);
-    let _ = writeln!(s, "  worst intervals:");
-    for w in &d.worst_intervals {
-        let _ = writeln!(
-            s,
-            "    {:>7.0}–{:<7.0} s  mean residual {:+.4e} {u}  at {:.1}° {:+.2}°/min  {}",
-            w.start_s, w.end_s, w.residual_mean, w.temperature, w.rate_per_min, w.during
-        );
-    }
-    if !d.verify_segments.is_empty() {
-        let _ = writeln!(s, "\nOn the verification run:");
-        seg(&mut s, &d.verify_segments);
-        let _ = writeln!(s, "  worst intervals:");
-        for w in &d.verify_worst_intervals {
-            let _ = writeln!(
-                s,
-                "    {:>7.0}–{:<7.0} s  mean residual {:+.4e} {u}  at {:.1}° {:+.2}°/min  {}",
-                w.start_s, w.end_s, w.residual_mean, w.temperature, w.rate_per_min, w.during
-            );
-        }
-    }
-    let b = &d.base;
-    let _ = writeln!(
-        s,
-        "\nCandidates ({} fits in {:.2} s; {} s bins; held-out: {}, {} s bins):",
-        d.fits, d.elapsed_s, b.bin_s, b.heldout, b.heldout_bin_s
-    );
-    let _ = writeln!(
-        s,
-        "  held-out residual of the model's features {:.4e} {u} (refitted by the trainer: {:.4e} {u}); noise floor estimate {:.4e} {u}",
-        b.heldout_residual_std, d.refit_residual_std_before, b.noise_floor_estimate
-    );
-    let _ = writeln!(
-        s,
-        "  {:<3}{:<58} {:>9} {:>12} {:>8}  {:<8} expression",
-        "", "effect", "Δ ln E", "held-out", "better", "from"
-    );
-    for c in d.candidates.iter().take(top) {
-        let _ = writeln!(
-            s,
-            "  {:<3}{:<58} {:>+9.1} {:>12.4e} {:>7.1}%  {:<8} {}",
-            if c.passes { "✔" } else { "" },
-            c.effect,
-            c.delta_log_evidence,
-            c.residual_std_after,
-            c.improvement_pct,
-            if c.confirmation.is_some() {
-                "refit"
-            } else {
-                "scoring"
-            },
-            c.expressions.join(" ; ")
-        );
-    }
-    for k in &d.skipped {
-        let _ = writeln!(s, "  skipped {}: {}", k.expression, k.reason);
-    }
-    let _ = writeln!(s, "\nCriterion: {}.", d.criterion);
-    let _ = writeln!(
-        s,
-        "Verdict: {}",
-        match d.verdict {
-            Verdict::MissingEffect => d.verdict_text.clone(),
-            Verdict::None => d.verdict_text.clone(),
-        }
-    );
-    s
 }

@@ -1,0 +1,68 @@
+//! The candidate table: which effects could be missing, how much evidence each carries, and what
+//! the held-out residual becomes with it.
+//!
+//! One function in two layouts: `diagnose` prints columns an engineer scans (with the expressions to
+//! paste), the demo prints a narrative line per candidate (before → after in the model's unit).
+//! Both take the same rows in the same order and mark a candidate that passes the criterion the
+//! same way.
+
+use std::fmt::Write as _;
+use tcomp_discover::score::Scored;
+
+/// How the table is laid out.
+#[derive(Clone, Copy, Debug)]
+pub enum Layout<'a> {
+    /// A header and one row of columns per candidate, with its expressions (`tcomp diagnose`).
+    Columns,
+    /// One indented sentence per candidate: held-out before → after in `unit` (`tcomp demo`).
+    Narrative {
+        /// The model's output unit.
+        unit: &'a str,
+    },
+}
+
+/// Appends the first `top` candidates of `candidates` (best first) to `out`.
+pub fn table(out: &mut String, candidates: &[Scored], top: usize, layout: Layout<'_>) {
+    if let Layout::Columns = layout {
+        let _ = writeln!(
+            out,
+            "  {:<3}{:<58} {:>9} {:>12} {:>8}  {:<8} expression",
+            "", "effect", "Δ ln E", "held-out", "better", "from"
+        );
+    }
+    for c in candidates.iter().take(top) {
+        let refitted = c.confirmation.is_some();
+        match layout {
+            Layout::Columns => {
+                let _ = writeln!(
+                    out,
+                    "  {:<3}{:<58} {:>+9.1} {:>12.4e} {:>7.1}%  {:<8} {}",
+                    if c.passes { "✔" } else { "" },
+                    c.effect,
+                    c.delta_log_evidence,
+                    c.residual_std_after,
+                    c.improvement_pct,
+                    if refitted { "refit" } else { "scoring" },
+                    c.expressions.join(" ; ")
+                );
+            }
+            Layout::Narrative { unit } => {
+                let _ = writeln!(
+                    out,
+                    "   {} {:<52} Δ log evidence {:+8.1}   held-out {:.4} → {:.4} {unit} ({:+.1} %){}",
+                    if c.passes { "✔" } else { " " },
+                    c.effect,
+                    c.delta_log_evidence,
+                    c.residual_std_before,
+                    c.residual_std_after,
+                    -c.improvement_pct,
+                    if refitted {
+                        ", refitted"
+                    } else {
+                        ", scoring estimate"
+                    }
+                );
+            }
+        }
+    }
+}
