@@ -1,4 +1,5 @@
 //! The firmware: the compensation loop ([`app`]), the fault record kept across resets ([`fault`]),
+//! the time-base check ([`timing`]),
 //! the model-blob image in flash ([`image`]), the replay board of the QEMU run ([`replay`]), and
 //! board support for the binaries (semihosting exit codes, the SysTick instruction counter).
 //!
@@ -15,6 +16,7 @@ pub mod app;
 pub mod fault;
 pub mod image;
 pub mod replay;
+pub mod timing;
 
 #[cfg(target_os = "none")]
 mod board;
