@@ -303,8 +303,9 @@ impl<'a> App<'a> {
             *n = model.program.inputs.len() as u8;
         }
         if let (Some(m), Some(c)) = (self.models.get_mut(k), self.channels.get_mut(k)) {
-            *m = Some(model);
             c.reset();
+            c.prepare(&model);
+            *m = Some(model);
         }
         Ok(())
     }
