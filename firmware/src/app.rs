@@ -275,8 +275,8 @@ impl<'a> App<'a> {
         })
     }
 
-    /// Not inlined: one decoded model (about 1.5 KB) on the stack at a time, not six.
-    #[inline(never)]
+    /// Decodes channel `k`'s blob straight into its slot of the loop (no `Model` moved around
+    /// after decoding), then wires its inputs. On error the caller clears the slot.
     fn load_channel(
         &mut self,
         k: usize,
@@ -286,7 +286,9 @@ impl<'a> App<'a> {
         let blob = image
             .and_then(|i| i.blob(cfg.id))
             .map_err(LoadError::Image)?;
-        let model = FwModel::decode(blob).map_err(LoadError::Blob)?;
+        let slot = self.models.get_mut(k).ok_or(LoadError::Unwired)?;
+        decode_into(slot, blob).map_err(LoadError::Blob)?;
+        let model = slot.as_ref().ok_or(LoadError::Unwired)?;
         let map = self.input_map.get_mut(k).ok_or(LoadError::Unwired)?;
         for (slot, name) in map.iter_mut().zip(model.program.inputs.iter()) {
             let (_, t) = cfg
@@ -302,10 +304,9 @@ impl<'a> App<'a> {
         if let Some(n) = self.n_inputs.get_mut(k) {
             *n = model.program.inputs.len() as u8;
         }
-        if let (Some(m), Some(c)) = (self.models.get_mut(k), self.channels.get_mut(k)) {
+        if let Some(c) = self.channels.get_mut(k) {
             c.reset();
-            c.prepare(&model);
-            *m = Some(model);
+            c.prepare(model);
         }
         Ok(())
     }
@@ -497,6 +498,14 @@ impl<'a> App<'a> {
         f64::from(rec.counts) * f64::from(cfg.scale.per_pulse()) / interval
             - f64::from(rec.correction)
     }
+}
+
+/// Decodes `blob` into `slot`. Not inlined, so one model's decoding temporaries (postcard's, about
+/// 4 KB on thumbv7em) are on the stack once, while the caller's frame stays small.
+#[inline(never)]
+fn decode_into<'a>(slot: &mut Option<FwModel<'a>>, blob: &'a [u8]) -> Result<(), BlobError> {
+    *slot = Some(FwModel::decode(blob)?);
+    Ok(())
 }
 
 /// Whether a thermometer may have moved from its last plausible reading `good` to `v` in `periods`

@@ -211,7 +211,9 @@ impl Loop {
                 r.flagged += 1;
             }
         }
-        let frame = self.app.frame(n as u32, self.vector.timestamp(n), TICK_HZ, out);
+        let frame = self
+            .app
+            .frame(n as u32, self.vector.timestamp(n), TICK_HZ, out);
         let mut bytes = [0u8; MAX_FRAME_LEN];
         if let Ok(len) = frame.encode(&mut bytes) {
             self.uart.write_all(bytes.get(..len).unwrap_or(&[]));
@@ -267,7 +269,9 @@ fn stack_peak(bottom: usize, top: usize) -> usize {
 fn take_fault() -> Option<FaultRecord> {
     // SAFETY: only `main` (before any interrupt is enabled) and the fault handlers (which never
     // return to it) touch FAULT; every bit pattern is a valid `FaultRecord`.
-    let slot = unsafe { &mut *(&raw mut FAULT) };
+    let ptr: *mut MaybeUninit<FaultRecord> = &raw mut FAULT;
+    // SAFETY: see above.
+    let slot = unsafe { &mut *ptr };
     // SAFETY: every bit pattern of the `repr(C)` integer record is valid (see `fault.rs`).
     let record = unsafe { slot.assume_init_read() };
     slot.write(FaultRecord::CLEAR);
@@ -276,7 +280,9 @@ fn take_fault() -> Option<FaultRecord> {
 
 fn record_fault(record: FaultRecord) {
     // SAFETY: a fault handler writes the record and resets or hangs; nothing else runs after it.
-    unsafe { (*(&raw mut FAULT)).write(record) };
+    let ptr: *mut MaybeUninit<FaultRecord> = &raw mut FAULT;
+    // SAFETY: as above.
+    unsafe { (*ptr).write(record) };
 }
 
 #[entry]
@@ -288,7 +294,9 @@ fn main() -> ! {
     let fault = take_fault();
     // SAFETY: `main` runs once per boot and takes the only references to RUN and APP before the
     // sample interrupt, their only other user, is enabled.
-    let (run, app) = unsafe { (&mut *(&raw mut RUN), &mut *(&raw mut APP)) };
+    let (run, app): (*mut MaybeUninit<Run>, *mut App<'static>) = (&raw mut RUN, &raw mut APP);
+    // SAFETY: as above.
+    let (run, app) = unsafe { (&mut *run, &mut *app) };
     // SAFETY: every bit pattern of the `repr(C)` integer struct is valid.
     let previous = unsafe { run.assume_init_read() };
     let mut boot_flags = 0;
