@@ -500,12 +500,11 @@ impl<'a> App<'a> {
     }
 }
 
-/// Decodes `blob` into `slot`. Not inlined, so one model's decoding temporaries (postcard's, about
-/// 4 KB on thumbv7em) are on the stack once, while the caller's frame stays small.
+/// Decodes `blob` into `slot` in place ([`Model::decode_into`]). Not inlined, so the decoder's
+/// frame is on the stack once, while the caller's stays small.
 #[inline(never)]
 fn decode_into<'a>(slot: &mut Option<FwModel<'a>>, blob: &'a [u8]) -> Result<(), BlobError> {
-    *slot = Some(FwModel::decode(blob)?);
-    Ok(())
+    FwModel::decode_into(blob, slot)
 }
 
 /// Whether a thermometer may have moved from its last plausible reading `good` to `v` in `periods`

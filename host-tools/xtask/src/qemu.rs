@@ -15,13 +15,11 @@ use tcomp_firmware::replay::{CONFIG_IFOG1, CONFIG_IMU6, HANG, STALL, TIME_GLITCH
 /// Budgets, from the issue and the part. Instructions: the worst 6-channel sample with every model
 /// evaluated every sample (no stagger): 11,725 measured. Flash: an STM32F405/407 has 1 MiB, less
 /// the 128 KiB sector 11 that holds the model image (the board crate's budget, `board.rs`).
-/// Memory: the issue's target is static RAM + stack ≤ 16 KiB for the 6-channel run; measured
-/// 11.7 KB static (the `App` with six models) + 6.5 KB stack, whose peak is postcard decoding one
-/// model (a 5.9 KB frame: serde moves the model through about four copies). Until the blob decodes
-/// in place the enforced budget guards the figure reached; the target is printed beside it.
+/// Memory: static RAM + stack ≤ 16 KiB for the 6-channel run; measured 11,732 B static (the `App`
+/// with six models) + 4,052 B stack (6,544 B while the blob was decoded by value: serde moved the
+/// model through four stack copies; `Model::decode_into` decodes in place).
 const WORST_INSTRUCTIONS_BUDGET: u64 = 12_000;
-const RAM_TARGET: u64 = 16 * 1024;
-const RAM_BUDGET: u64 = 19 * 1024;
+const RAM_BUDGET: u64 = 16 * 1024;
 const FLASH_BUDGET: u64 = crate::board::FLASH_BUDGET;
 const SAMPLES: usize = 10_000;
 /// The core's clock on the STM32F407 board, for the CPU load the instruction counts mean (an M4F
@@ -545,13 +543,8 @@ pub fn qemu() -> Result<()> {
         std::mem::size_of::<tcomp_firmware::app::App<'static>>()
     );
     println!(
-        "flash {flash} B (budget {FLASH_BUDGET}), static RAM {static_ram} B + stack peak {stack} B = {} B (budget {RAM_BUDGET}; issue target {RAM_TARGET}: {})",
-        static_ram + stack,
-        if static_ram + stack <= RAM_TARGET {
-            "met"
-        } else {
-            "NOT met"
-        }
+        "flash {flash} B (budget {FLASH_BUDGET}), static RAM {static_ram} B + stack peak {stack} B = {} B (budget {RAM_BUDGET})",
+        static_ram + stack
     );
     println!(
         "QEMU-SUMMARY samples={samples} mismatches=0 faults_flagged={flagged} transport=uart timer=hw \
