@@ -142,9 +142,10 @@ struct Loop {
     watchdog: Watchdog,
     counter: InstructionCounter,
     check: TimeCheck,
-    /// Time base at the timer's start, and the index of the last timer edge served.
-    t_start: u32,
-    edge: u32,
+    /// Time base at the next timer edge due (wrapping with the 32-bit time base), and the edges
+    /// served so far.
+    next_edge: u32,
+    edges: u32,
     last_entry: u32,
     /// The first frame of this boot carries the reset cause.
     boot_flags: u16,
@@ -158,12 +159,16 @@ impl Loop {
         let entry = self.time.now();
         // Which timer edge this is: lateness beyond a quarter period is an overrun of the previous
         // sample, and whole periods that passed unserved were missed (never merged silently).
-        let elapsed = entry.wrapping_sub(self.t_start);
-        let edge = elapsed / PERIOD;
-        let late = elapsed - edge * PERIOD > PERIOD / 4;
-        let missed = edge.saturating_sub(self.edge + 1);
-        let previous_edge = self.edge;
-        self.edge = edge;
+        // (Entered before the edge it was due for cannot happen; read as on time, not as 2³² late.)
+        let since = match entry.wrapping_sub(self.next_edge) {
+            s if s > u32::MAX / 2 => 0,
+            s => s,
+        };
+        let missed = since / PERIOD;
+        let late = since % PERIOD > PERIOD / 4 || missed > 0;
+        self.next_edge = self.next_edge.wrapping_add(PERIOD.wrapping_mul(missed + 1));
+        let previous_edges = self.edges;
+        self.edges += 1;
         let n = self.run.next as usize;
         if n >= self.vector.samples {
             self.timer.stop();
@@ -187,7 +192,7 @@ impl Loop {
             r.instr_max_at = n as u32;
         }
         let systick = self.counter.now();
-        if r.period_ticks == 0 && previous_edge != 0 {
+        if r.period_ticks == 0 && previous_edges != 0 {
             r.period_ticks = self.last_entry.wrapping_sub(systick) & 0xFF_FFFF;
         }
         self.last_entry = systick;
@@ -371,8 +376,8 @@ fn main() -> ! {
         watchdog,
         counter: InstructionCounter::new(cp.SYST),
         check: TimeCheck::new(TICKS_PER_PERIOD),
-        t_start,
-        edge: 0,
+        next_edge: t_start.wrapping_add(PERIOD),
+        edges: 0,
         last_entry: 0,
         boot_flags,
     };
