@@ -9,7 +9,8 @@
 //!
 //! Under QEMU with `-icount shift=0` every guest instruction takes one nanosecond of virtual time and
 //! SysTick runs from the 25 MHz board clock, so one SysTick tick is 40 instructions: counting ticks
-//! counts instructions deterministically (QEMU does not emulate the DWT cycle counter).
+//! counts instructions deterministically (QEMU does not emulate the DWT cycle counter). The replay
+//! runs with `-icount shift=3` (8 ns per instruction): one tick is 5 instructions there.
 #![no_std]
 
 pub mod app;

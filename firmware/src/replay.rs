@@ -294,3 +294,64 @@ impl Board {
         (t, c)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    extern crate std;
+    use super::*;
+    use std::vec::Vec;
+
+    /// One counter, no thermometer, one channel: registers 100, 150, 230 from 0; sample 1's
+    /// interval flagged and its timestamp glitched.
+    fn vector() -> Vec<u8> {
+        let mut b = Vec::new();
+        b.extend_from_slice(&MAGIC);
+        b.extend_from_slice(&VERSION.to_le_bytes());
+        b.extend_from_slice(&CONFIG_IFOG1.to_le_bytes());
+        b.extend_from_slice(&3u32.to_le_bytes());
+        for v in [0u16, 1, 1, 0] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&0u32.to_le_bytes());
+        for (mask, reg) in [
+            (0u32, 100u32),
+            ((1 << COUNTER_FLAG_SHIFT) | TIME_GLITCH, 150),
+            (0, 230),
+        ] {
+            b.extend_from_slice(&mask.to_le_bytes());
+            b.extend_from_slice(&reg.to_le_bytes());
+        }
+        b.resize(b.len() + 3 * 8, 0);
+        b
+    }
+
+    #[test]
+    fn a_flagged_interval_is_consumed_and_a_fresh_board_latches_the_previous_sample() {
+        let bytes = vector();
+        let v = Vector::parse(&bytes).unwrap();
+        let mut board = v.board();
+        let mut deltas = Vec::new();
+        for n in 0..3 {
+            v.load(n, &mut board);
+            deltas.push(board.sensors().1[0].read_delta());
+        }
+        assert_eq!(deltas, [Ok(100), Err(ErrorKind::Fault), Ok(80)]);
+        let mut fresh = v.board_at(2);
+        v.load(2, &mut fresh);
+        assert_eq!(fresh.sensors().1[0].read_delta(), Ok(80));
+        let mut first = v.board_at(0);
+        v.load(0, &mut first);
+        assert_eq!(first.sensors().1[0].read_delta(), Ok(100));
+    }
+
+    #[test]
+    fn timestamps_are_periods_and_a_glitch_is_half_a_period_late() {
+        let bytes = vector();
+        let v = Vector::parse(&bytes).unwrap();
+        let t: Vec<u64> = (0..3).map(|n| v.timestamp(n)).collect();
+        assert_eq!(t, [0, TICKS_PER_PERIOD * 3 / 2, 2 * TICKS_PER_PERIOD]);
+        assert_eq!(v.board_faults(1), TIME_GLITCH);
+        assert_eq!(v.board_faults(0), 0);
+    }
+}
