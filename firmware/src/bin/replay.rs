@@ -93,8 +93,8 @@ struct Run {
     /// Boots after a watchdog reset.
     watchdog_resets: u32,
     stack_peak: u32,
-    /// The sample of the worst instruction count, and the time-base ticks between the first two
-    /// timer interrupts (the measured period).
+    /// The sample of the worst instruction count, and the SysTick ticks (25 MHz) between the
+    /// first two timer interrupts: the period as measured by the core's own clock (125,000).
     instr_max_at: u32,
     period_ticks: u32,
 }
@@ -146,6 +146,7 @@ struct Loop {
     /// served so far.
     next_edge: u32,
     edges: u32,
+    /// SysTick at the previous interrupt (for `period_ticks`).
     last_entry: u32,
     /// The first frame of this boot carries the reset cause.
     boot_flags: u16,
