@@ -48,18 +48,22 @@ pub const MAX_THERMOMETERS: usize = 12;
 pub const MAX_COUNTERS: usize = 6;
 /// Most channels a configuration has.
 pub const MAX_CHANNELS: usize = 6;
-/// Each channel refreshes its model correction every this many samples (staggered: channel k on
-/// sample k of each interval) and holds it in between; its feature program still runs every sample.
-/// At 200 Hz that is a 33 Hz correction update — thermal features change over seconds to hours — and
-/// one RBF evaluation per loop iteration instead of six. Set to 1 to evaluate every channel every
-/// sample (see BENCHMARKS.md for both instruction counts).
-pub const MODEL_INTERVAL: u16 = MAX_CHANNELS as u16;
+/// Largest rate of change a thermometer bonded to an instrument can show, °C/s. The thermal time
+/// constants of the instruments are a minute (a QMA's package) to tens of minutes (an RLG block, a
+/// fibre coil); even a 100 °C step of the surroundings moves a part with τ ≥ 60 s by at most
+/// 100/60 ≈ 1.7 °C/s. 5 °C/s is three times that.
+pub const MAX_TEMP_RATE_C_PER_S: f32 = 5.0;
+/// Change between two readings allowed on top of [`MAX_TEMP_RATE_C_PER_S`], °C: an ADS1220 at
+/// 20 SPS delivers a new conversion every 50 ms (10 loop periods), so a reading moves in steps of up
+/// to 50 ms of drift (0.25 °C at the maximum rate) plus the converter's noise (~0.01 °C on a PT1000).
+pub const TEMP_STEP_MARGIN_C: f32 = 0.5;
 
 /// The status word of one output: the core's [`tcomp_core::Status`] bits plus the loop's own, defined
 /// once with their names in [`tcomp_core::frame::status`] (the frame carries this word).
 pub mod status {
     pub use tcomp_core::frame::status::{
         INPUT_FAULT, MODEL_FAULT, NO_MODEL, OK, OUT_OF_RANGE, OVERRUN, SENSOR_ERROR, STUCK,
+        TEMP_JUMP, TIME_JUMP, WATCHDOG_RESET,
     };
 }
 
@@ -183,6 +187,22 @@ struct ThermState {
     last_bits: u32,
     repeats: u16,
     error: bool,
+    /// The last reading accepted as plausible (NaN before the first), and the periods since.
+    good: f32,
+    since_good: u16,
+    jump: bool,
+}
+
+impl ThermState {
+    const NEW: Self = Self {
+        value: 0.0,
+        last_bits: 0,
+        repeats: 0,
+        error: false,
+        good: f32::NAN,
+        since_good: 0,
+        jump: false,
+    };
 }
 
 /// The loop for a configuration of up to [`MAX_CHANNELS`] channels (one type for every
@@ -199,19 +219,47 @@ pub struct App<'a> {
 }
 
 impl<'a> App<'a> {
-    /// The loop with no models yet; channels past [`MAX_CHANNELS`] are ignored.
-    pub fn new(config: &'static [ChannelConfig]) -> Self {
+    /// The loop with no models yet; channels past [`MAX_CHANNELS`] are ignored. `const`, so a board
+    /// can keep the loop in a `static` (about 11 KB on thumbv7em) without building it on the stack.
+    ///
+    /// Every channel evaluates its model on every sample (200 Hz). Evaluating only on a new
+    /// thermometer conversion (every 50 ms at 20 SPS) would not lower the worst case: the ADCs
+    /// convert asynchronously to the sample timer, so all six channels can see a new conversion in
+    /// the same period, and the budget must hold for that period anyway. It would lower only the
+    /// mean, which does not matter at 1–2 % of a 168 MHz M4F, and it would couple the correction's
+    /// timing to the ADCs' phase. At full rate the correction also follows the rate features, which
+    /// the feature program updates every period.
+    pub const fn new(config: &'static [ChannelConfig]) -> Self {
+        let config = if config.len() > MAX_CHANNELS {
+            config.split_at(MAX_CHANNELS).0
+        } else {
+            config
+        };
         Self {
-            config: config.get(..MAX_CHANNELS).unwrap_or(config),
+            config,
             models: [const { None }; MAX_CHANNELS],
             input_map: [[0; MAX_INPUTS]; MAX_CHANNELS],
             n_inputs: [0; MAX_CHANNELS],
-            channels: core::array::from_fn(|k| {
-                Channel::new(PERIOD_S).with_model_interval(MODEL_INTERVAL, k as u16)
-            }),
-            therms: [ThermState::default(); MAX_THERMOMETERS],
+            channels: [const { Channel::new(PERIOD_S) }; MAX_CHANNELS],
+            therms: [ThermState::NEW; MAX_THERMOMETERS],
             missed: [0; MAX_COUNTERS],
         }
+    }
+
+    /// Back to the state of [`App::new`]`(config)`, in place (no `App` on the stack): a board with
+    /// the loop in a `static` calls this at boot with the configuration it found.
+    pub fn reset(&mut self, config: &'static [ChannelConfig]) {
+        self.config = config.get(..MAX_CHANNELS).unwrap_or(config);
+        for m in &mut self.models {
+            *m = None;
+        }
+        self.input_map = [[0; MAX_INPUTS]; MAX_CHANNELS];
+        self.n_inputs = [0; MAX_CHANNELS];
+        for c in &mut self.channels {
+            c.reset();
+        }
+        self.therms = [ThermState::NEW; MAX_THERMOMETERS];
+        self.missed = [0; MAX_COUNTERS];
     }
 
     /// Loads every channel's model from the image bytes; returns each channel's outcome. A channel
@@ -227,6 +275,8 @@ impl<'a> App<'a> {
         })
     }
 
+    /// Decodes channel `k`'s blob straight into its slot of the loop (no `Model` moved around
+    /// after decoding), then wires its inputs. On error the caller clears the slot.
     fn load_channel(
         &mut self,
         k: usize,
@@ -236,7 +286,9 @@ impl<'a> App<'a> {
         let blob = image
             .and_then(|i| i.blob(cfg.id))
             .map_err(LoadError::Image)?;
-        let model = FwModel::decode(blob).map_err(LoadError::Blob)?;
+        let slot = self.models.get_mut(k).ok_or(LoadError::Unwired)?;
+        decode_into(slot, blob).map_err(LoadError::Blob)?;
+        let model = slot.as_ref().ok_or(LoadError::Unwired)?;
         let map = self.input_map.get_mut(k).ok_or(LoadError::Unwired)?;
         for (slot, name) in map.iter_mut().zip(model.program.inputs.iter()) {
             let (_, t) = cfg
@@ -252,9 +304,9 @@ impl<'a> App<'a> {
         if let Some(n) = self.n_inputs.get_mut(k) {
             *n = model.program.inputs.len() as u8;
         }
-        if let (Some(m), Some(c)) = (self.models.get_mut(k), self.channels.get_mut(k)) {
-            *m = Some(model);
+        if let Some(c) = self.channels.get_mut(k) {
             c.reset();
+            c.prepare(model);
         }
         Ok(())
     }
@@ -301,6 +353,8 @@ impl<'a> App<'a> {
 
     fn read_thermometers<T: Thermometer>(&mut self, thermometers: &mut [T]) {
         for (t, s) in thermometers.iter_mut().zip(self.therms.iter_mut()) {
+            s.since_good = s.since_good.saturating_add(1);
+            s.jump = false;
             match t.read_celsius() {
                 Ok(v) => {
                     let bits = v.to_bits();
@@ -309,12 +363,19 @@ impl<'a> App<'a> {
                     } else {
                         0
                     };
-                    *s = ThermState {
-                        value: v,
-                        last_bits: bits,
-                        repeats: s.repeats,
-                        error: false,
-                    };
+                    s.last_bits = bits;
+                    s.error = false;
+                    s.value = v;
+                    if v.is_finite() {
+                        if plausible_step(s.good, v, s.since_good) {
+                            s.good = v;
+                            s.since_good = 0;
+                        } else {
+                            // Implausible within range: held like a failed read, flagged.
+                            s.value = f32::NAN;
+                            s.jump = true;
+                        }
+                    }
                 }
                 Err(_) => {
                     s.value = f32::NAN;
@@ -376,6 +437,9 @@ impl<'a> App<'a> {
                 if s.repeats >= STUCK_SAMPLES {
                     flags |= status::STUCK;
                 }
+                if s.jump {
+                    flags |= status::TEMP_JUMP;
+                }
             }
         }
         let mut inputs = [0.0f32; MAX_INPUTS];
@@ -434,6 +498,23 @@ impl<'a> App<'a> {
         f64::from(rec.counts) * f64::from(cfg.scale.per_pulse()) / interval
             - f64::from(rec.correction)
     }
+}
+
+/// Decodes `blob` into `slot` in place ([`Model::decode_into`]). Not inlined, so the decoder's
+/// frame is on the stack once, while the caller's stays small.
+#[inline(never)]
+fn decode_into<'a>(slot: &mut Option<FwModel<'a>>, blob: &'a [u8]) -> Result<(), BlobError> {
+    FwModel::decode_into(blob, slot)
+}
+
+/// Whether a thermometer may have moved from its last plausible reading `good` to `v` in `periods`
+/// loop periods: at most [`TEMP_STEP_MARGIN_C`] plus [`MAX_TEMP_RATE_C_PER_S`] times the time
+/// elapsed. The allowance grows while readings are refused, so a real step of the sensor (or a
+/// reading that stays wrong) is accepted again after the time the physics needs to get there
+/// (a 3 °C step: 0.5 s); a spike is refused for its whole length. No reference yet: plausible.
+pub fn plausible_step(good: f32, v: f32, periods: u16) -> bool {
+    let allowed = TEMP_STEP_MARGIN_C + MAX_TEMP_RATE_C_PER_S * PERIOD_S * f32::from(periods);
+    good.is_nan() || (v - good).abs() <= allowed
 }
 
 #[cfg(test)]

@@ -20,6 +20,8 @@ pub enum FaultKind {
     Panic,
     /// A HardFault (bad address, undefined instruction, escalated bus or usage fault).
     HardFault,
+    /// The watchdog expired: its early-warning interrupt wrote the record before the reset.
+    Watchdog,
 }
 
 /// The record, as it lies in no-init RAM (`repr(C)`, every bit pattern a valid value).
@@ -82,6 +84,14 @@ impl FaultRecord {
         }
     }
 
+    /// The watchdog's early warning (its first expiry) interrupted the loop at `pc`; `lr` as stacked.
+    pub fn watchdog(pc: u32, lr: u32) -> Self {
+        Self {
+            kind: 4,
+            ..Self::hard_fault(pc, lr)
+        }
+    }
+
     /// The fault, if this is a record and not garbage.
     pub fn valid(&self) -> Option<FaultKind> {
         if self.magic != MAGIC || self.check != !MAGIC {
@@ -90,6 +100,7 @@ impl FaultRecord {
         match self.kind {
             1 => Some(FaultKind::Panic),
             2 => Some(FaultKind::HardFault),
+            4 => Some(FaultKind::Watchdog),
             _ => None,
         }
     }
@@ -129,6 +140,14 @@ mod tests {
             (h.file(), h.line_or_pc(), h.lr()),
             ("", 0x0800_1234, 0xFFFF_FFF9)
         );
+    }
+
+    #[test]
+    fn a_watchdog_record_reads_back_as_one() {
+        let w = FaultRecord::watchdog(0x1234, 0xFFFF_FFF9);
+        assert_eq!(w.valid(), Some(FaultKind::Watchdog));
+        assert_eq!((w.line_or_pc(), w.lr()), (0x1234, 0xFFFF_FFF9));
+        assert_ne!(w.valid(), FaultRecord::hard_fault(0x1234, 0).valid());
     }
 
     #[test]

@@ -1,4 +1,5 @@
 //! The firmware: the compensation loop ([`app`]), the fault record kept across resets ([`fault`]),
+//! the time-base check ([`timing`]),
 //! the model-blob image in flash ([`image`]), the replay board of the QEMU run ([`replay`]), and
 //! board support for the binaries (semihosting exit codes, the SysTick instruction counter).
 //!
@@ -8,13 +9,15 @@
 //!
 //! Under QEMU with `-icount shift=0` every guest instruction takes one nanosecond of virtual time and
 //! SysTick runs from the 25 MHz board clock, so one SysTick tick is 40 instructions: counting ticks
-//! counts instructions deterministically (QEMU does not emulate the DWT cycle counter).
+//! counts instructions deterministically (QEMU does not emulate the DWT cycle counter). The replay
+//! runs with `-icount shift=3` (8 ns per instruction): one tick is 5 instructions there.
 #![no_std]
 
 pub mod app;
 pub mod fault;
 pub mod image;
 pub mod replay;
+pub mod timing;
 
 #[cfg(target_os = "none")]
 mod board;

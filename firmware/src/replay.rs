@@ -18,7 +18,9 @@
 //! 18      2     reserved (0)
 //! 20      4·P   counter registers before the first sample (u32)
 //! …       S × (4 + 4T + 4P)   per sample: fault mask u32 (bit i: thermometer i bus error,
-//!                             bit 16+j: counter j bus error), T temperatures (f32 °C, may be NaN),
+//!                             bit 16+j: counter j bus error, bit 22+j: counter j flags the
+//!                             interval, bits 28–30: the board's injections [`STALL`],
+//!                             [`TIME_GLITCH`], [`HANG`]), T temperatures (f32 °C, may be NaN),
 //!                             P counter registers (u32, free-running, wrapping)
 //! …       S × K × 8           expected output per sample and channel: compensated f32 bits (u32),
 //!                             status (u32)
@@ -36,6 +38,22 @@ pub const MAGIC: [u8; 4] = *b"TCRV";
 pub const VERSION: u16 = 1;
 /// Bytes before the initial counter values.
 pub const HEADER_LEN: usize = 20;
+/// Fault-mask bit: the sample task of this sample takes longer than a period (the next sample is
+/// late and flagged [`crate::app::status::OVERRUN`]).
+pub const STALL: u32 = 1 << 28;
+/// Fault-mask bit: this sample's latched timestamp is off by half a period (a glitch of the time
+/// base, flagged [`crate::app::status::TIME_JUMP`]).
+pub const TIME_GLITCH: u32 = 1 << 29;
+/// Fault-mask bit: the loop hangs in this sample; the watchdog resets the board, which resumes with
+/// the next sample and flags [`crate::app::status::WATCHDOG_RESET`] on its first frame.
+pub const HANG: u32 = 1 << 30;
+/// First fault-mask bit of the counters' flagged intervals (counter `j`: this bit shifted by `j`).
+pub const COUNTER_FLAG_SHIFT: u32 = 22;
+/// Timestamp ticks per loop period of the replayed time base (25 MHz, the board clock).
+pub const TICKS_PER_PERIOD: u64 = 125_000;
+/// Tick rate of the replayed time base.
+pub const TICK_HZ: u32 = 25_000_000;
+
 /// Configuration code of [`crate::app::IMU6`].
 pub const CONFIG_IMU6: u16 = 0;
 /// Configuration code of [`crate::app::IFOG1`].
@@ -130,6 +148,37 @@ impl<'a> Vector<'a> {
         }
     }
 
+    /// The board-level injections of sample `n` ([`STALL`], [`TIME_GLITCH`], [`HANG`]).
+    pub fn board_faults(&self, n: usize) -> u32 {
+        u32_at(self.bytes, self.inputs_at() + n * self.record_len()) & (STALL | TIME_GLITCH | HANG)
+    }
+
+    /// The timestamp the counter block latched at sample `n`'s timer edge (ticks of [`TICK_HZ`]):
+    /// `n` periods, half a period late where [`TIME_GLITCH`] is injected.
+    pub fn timestamp(&self, n: usize) -> u64 {
+        let t = n as u64 * TICKS_PER_PERIOD;
+        if self.board_faults(n) & TIME_GLITCH != 0 {
+            t + TICKS_PER_PERIOD / 2
+        } else {
+            t
+        }
+    }
+
+    /// A board as a fresh boot finds it before sample `n`: the counters' last latch is sample
+    /// `n − 1`'s (the one before the first sample for `n = 0`).
+    pub fn board_at(&self, n: usize) -> Board {
+        let mut b = self.board();
+        if let Some(prev) = n.checked_sub(1) {
+            self.load(prev, &mut b);
+            for c in b.counters.iter_mut() {
+                c.last = c.register;
+                c.fault = false;
+                c.flagged = false;
+            }
+        }
+        b
+    }
+
     /// A board positioned before the first sample.
     pub fn board(&self) -> Board {
         let mut b = Board {
@@ -144,6 +193,7 @@ impl<'a> Vector<'a> {
                 register: r,
                 last: r,
                 fault: false,
+                flagged: false,
             };
         }
         b
@@ -168,6 +218,7 @@ impl<'a> Vector<'a> {
         for (j, c) in board.counters.iter_mut().take(self.counters).enumerate() {
             c.register = u32_at(self.bytes, counters_at + 4 * j);
             c.fault = faults & (1 << (16 + j)) != 0;
+            c.flagged = faults & (1 << (COUNTER_FLAG_SHIFT as usize + j)) != 0;
         }
     }
 }
@@ -199,6 +250,7 @@ pub struct ReplayCounter {
     register: u32,
     last: u32,
     fault: bool,
+    flagged: bool,
 }
 
 impl ErrorType for ReplayCounter {
@@ -210,6 +262,11 @@ impl PulseCounter for ReplayCounter {
         if self.fault {
             // The register keeps counting; the next good read returns everything since `last`.
             return Err(ErrorKind::Bus);
+        }
+        if self.flagged {
+            // The block flagged the interval (pulses lost): consumed, the next one starts clean.
+            self.last = self.register;
+            return Err(ErrorKind::Fault);
         }
         let delta = wrapping_delta(self.last, self.register, 32);
         self.last = self.register;
@@ -235,5 +292,66 @@ impl Board {
             .unwrap_or(&mut []);
         let c = self.counters.get_mut(..self.n_counters).unwrap_or(&mut []);
         (t, c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    extern crate std;
+    use super::*;
+    use std::vec::Vec;
+
+    /// One counter, no thermometer, one channel: registers 100, 150, 230 from 0; sample 1's
+    /// interval flagged and its timestamp glitched.
+    fn vector() -> Vec<u8> {
+        let mut b = Vec::new();
+        b.extend_from_slice(&MAGIC);
+        b.extend_from_slice(&VERSION.to_le_bytes());
+        b.extend_from_slice(&CONFIG_IFOG1.to_le_bytes());
+        b.extend_from_slice(&3u32.to_le_bytes());
+        for v in [0u16, 1, 1, 0] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b.extend_from_slice(&0u32.to_le_bytes());
+        for (mask, reg) in [
+            (0u32, 100u32),
+            ((1 << COUNTER_FLAG_SHIFT) | TIME_GLITCH, 150),
+            (0, 230),
+        ] {
+            b.extend_from_slice(&mask.to_le_bytes());
+            b.extend_from_slice(&reg.to_le_bytes());
+        }
+        b.resize(b.len() + 3 * 8, 0);
+        b
+    }
+
+    #[test]
+    fn a_flagged_interval_is_consumed_and_a_fresh_board_latches_the_previous_sample() {
+        let bytes = vector();
+        let v = Vector::parse(&bytes).unwrap();
+        let mut board = v.board();
+        let mut deltas = Vec::new();
+        for n in 0..3 {
+            v.load(n, &mut board);
+            deltas.push(board.sensors().1[0].read_delta());
+        }
+        assert_eq!(deltas, [Ok(100), Err(ErrorKind::Fault), Ok(80)]);
+        let mut fresh = v.board_at(2);
+        v.load(2, &mut fresh);
+        assert_eq!(fresh.sensors().1[0].read_delta(), Ok(80));
+        let mut first = v.board_at(0);
+        v.load(0, &mut first);
+        assert_eq!(first.sensors().1[0].read_delta(), Ok(100));
+    }
+
+    #[test]
+    fn timestamps_are_periods_and_a_glitch_is_half_a_period_late() {
+        let bytes = vector();
+        let v = Vector::parse(&bytes).unwrap();
+        let t: Vec<u64> = (0..3).map(|n| v.timestamp(n)).collect();
+        assert_eq!(t, [0, TICKS_PER_PERIOD * 3 / 2, 2 * TICKS_PER_PERIOD]);
+        assert_eq!(v.board_faults(1), TIME_GLITCH);
+        assert_eq!(v.board_faults(0), 0);
     }
 }

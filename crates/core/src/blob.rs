@@ -224,6 +224,14 @@ fn map_postcard(e: postcard::Error) -> BlobError {
     }
 }
 
+/// A postcard error of decoding `body` as a [`BlobError`], with an unknown tag located.
+fn map_body_error(body: &[u8], e: postcard::Error) -> BlobError {
+    match e {
+        postcard::Error::WontImplement => locate_unknown_tag(body),
+        e => map_postcard(e),
+    }
+}
+
 /// Where in `body` (a blob without its CRC) the unknown tag `map_postcard` reported is. A blob holds
 /// two enums: the sensor kind, the first field after magic and version, and the program's
 /// operations. Reading that one varint (rather than decoding the metadata again) keeps the firmware's
@@ -331,6 +339,76 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
     /// The CRC is checked before the version: a corrupted version byte is corruption, and only an
     /// intact blob of another format is reported as [`BlobError::UnsupportedVersion`].
     pub fn decode(bytes: &'a [u8]) -> Result<Self, BlobError> {
+        let body = Self::envelope(bytes)?;
+        let (model, rest) =
+            postcard::take_from_bytes::<Self>(body).map_err(|e| map_body_error(body, e))?;
+        if !rest.is_empty() {
+            return Err(BlobError::Malformed);
+        }
+        model.validate()?;
+        Ok(model)
+    }
+
+    /// [`decode`](Self::decode) straight into `place` (the same checks, errors and model): serde
+    /// writes each field where it belongs instead of building the model on the stack and moving
+    /// it, so a firmware decoding into a `static` needs a stack frame of a fraction of a model.
+    /// On error `place` is `None`.
+    pub fn decode_into(bytes: &'a [u8], place: &mut Option<Self>) -> Result<(), BlobError> {
+        let result = Self::envelope(bytes).and_then(|body| {
+            let model = place.insert(Self::placeholder());
+            let mut de = postcard::Deserializer::from_bytes(body);
+            <Self as Deserialize<'a>>::deserialize_in_place(&mut de, model)
+                .map_err(|e| map_body_error(body, e))?;
+            if !de.finalize().map_err(map_postcard)?.is_empty() {
+                return Err(BlobError::Malformed);
+            }
+            model.validate()
+        });
+        if result.is_err() {
+            *place = None;
+        }
+        result
+    }
+
+    /// An empty model for [`decode_into`](Self::decode_into) to overwrite field by field.
+    fn placeholder() -> Self {
+        Self {
+            magic: MAGIC,
+            version: FORMAT_VERSION,
+            meta: Meta {
+                sensor: SensorKind::Other,
+                axis: "",
+                unit: "",
+                method: "",
+                columns: ColumnRoles {
+                    time: "",
+                    target: "",
+                    reference: "",
+                    reference_value: None,
+                },
+                trained_on: "",
+                train_samples: 0,
+            },
+            program: Program {
+                inputs: Vec::new(),
+                signals: Vec::new(),
+                nodes: Vec::new(),
+                features: Vec::new(),
+                feature_exprs: Vec::new(),
+            },
+            ranges: Vec::new(),
+            rbf: Rbf::default(),
+            residual: ResidualLevel {
+                std: 0.0,
+                binned_std: 0.0,
+                bin_s: 0.0,
+            },
+        }
+    }
+
+    /// Checks magic, length and CRC, then the version (so a corrupted version byte is corruption);
+    /// returns the postcard body.
+    fn envelope(bytes: &'a [u8]) -> Result<&'a [u8], BlobError> {
         let magic = bytes.get(..4).ok_or(BlobError::Truncated)?;
         if magic != MAGIC {
             return Err(BlobError::BadMagic);
@@ -356,15 +434,7 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
         if version != FORMAT_VERSION {
             return Err(BlobError::UnsupportedVersion(version));
         }
-        let (model, rest) = postcard::take_from_bytes::<Self>(body).map_err(|e| match e {
-            postcard::Error::WontImplement => locate_unknown_tag(body),
-            e => map_postcard(e),
-        })?;
-        if !rest.is_empty() {
-            return Err(BlobError::Malformed);
-        }
-        model.validate()?;
-        Ok(model)
+        Ok(body)
     }
 
     /// The per-feature ranges as two points (lo, hi), for clamping.

@@ -146,6 +146,13 @@ impl<const N: usize, const F: usize> Channel<N, F> {
         *self = Self::new(self.period_s).with_model_interval(self.model_interval, self.model_phase);
     }
 
+    /// Readies the channel for `model` at its period: the feature program's filter coefficients
+    /// are computed now instead of on the second sample (see [`ProgramState::prepare`]); the
+    /// outputs are the same.
+    pub fn prepare<const C: usize>(&mut self, model: &Model<'_, C, F, N>) {
+        self.state.prepare(&model.program, self.period_s);
+    }
+
     /// The last good (unclamped) features.
     pub fn features(&self) -> &[f32; F] {
         &self.features

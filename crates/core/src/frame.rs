@@ -91,17 +91,28 @@ pub mod status {
     pub const STUCK: u16 = 16;
     /// The model's correction was not finite: raw passed through (core bit).
     pub const MODEL_FAULT: u16 = Status::MODEL_FAULT.0 as u16;
+    /// A thermometer of this channel moved faster than the instrument's thermal time constant
+    /// allows: the reading is refused like a failed one (loop bit).
+    pub const TEMP_JUMP: u16 = 1 << 6;
+    /// The sample's latched timestamp is not one period (plus any missed periods) after the last
+    /// one: the time base jumped (loop bit, on every channel of the frame).
+    pub const TIME_JUMP: u16 = 1 << 7;
     /// The sample task overran its period: this sample was late (board bit, on every channel of the
     /// frame). Board bits are taken from bit 15 down, the core's and the loop's from bit 0 up.
     pub const OVERRUN: u16 = 1 << 15;
+    /// The board booted after a watchdog reset: set on the first frame after that boot (board bit).
+    pub const WATCHDOG_RESET: u16 = 1 << 14;
     /// Every named bit with its name, lowest bit first.
-    pub const NAMES: [(u16, &str); 7] = [
+    pub const NAMES: [(u16, &str); 10] = [
         (NO_MODEL, "no-model"),
         (OUT_OF_RANGE, "out-of-range"),
         (INPUT_FAULT, "input-fault"),
         (SENSOR_ERROR, "sensor-error"),
         (STUCK, "stuck"),
         (MODEL_FAULT, "model-fault"),
+        (TEMP_JUMP, "temperature-jump"),
+        (TIME_JUMP, "time-jump"),
+        (WATCHDOG_RESET, "watchdog-reset"),
         (OVERRUN, "overrun"),
     ];
 

@@ -305,3 +305,34 @@ fn serde_of_the_guarded_enums_round_trips_every_variant() {
         postcard::Error::WontImplement
     );
 }
+
+/// `decode_into` (in place, for a firmware's static) must be `decode`: the same model, the same
+/// error, also over a slot that held another model, and an emptied slot on error.
+#[test]
+fn decode_into_is_decode_in_place() {
+    let other = encoded(30, 9);
+    let check = |bytes: &[u8]| {
+        let mut slot: Option<HostModel<'_>> = None;
+        HostModel::decode_into(&other, &mut slot).unwrap();
+        let into = HostModel::decode_into(bytes, &mut slot).map(|()| slot.clone().unwrap());
+        assert_eq!(into, HostModel::decode(bytes));
+        if into.is_err() {
+            assert!(slot.is_none());
+        }
+        // The smaller firmware type refuses the same blobs for the same reasons.
+        let mut small: Option<Model<'_, 32, 4, 24>> = None;
+        let small_into =
+            Model::<32, 4, 24>::decode_into(bytes, &mut small).map(|()| small.unwrap());
+        assert_eq!(small_into, Model::<32, 4, 24>::decode(bytes));
+    };
+    let good = encoded(16, 5);
+    check(&good);
+    check(&encoded(40, 2));
+    check(&encoded(1, 3));
+    for i in (0..good.len()).step_by(3) {
+        let mut bad = good.clone();
+        bad[i] ^= 0x80;
+        check(&bad);
+        check(&good[..i]);
+    }
+}

@@ -9,7 +9,7 @@ use crate::{TARGET, cargo};
 const PACKAGE: &str = "tcomp-board-stm32f4";
 const BIN: &str = "tcomp-stm32f4";
 /// Flash for the firmware: 1 MiB less sector 11 (128 KiB), which holds the model image.
-const FLASH_BUDGET: u64 = (1024 - 128) * 1024;
+pub const FLASH_BUDGET: u64 = (1024 - 128) * 1024;
 /// Static RAM: SRAM1 + SRAM2 (the stack has the 64 KiB CCM RAM to itself).
 const STATIC_RAM_BUDGET: u64 = 128 * 1024;
 
@@ -24,6 +24,21 @@ pub fn board() -> Result<()> {
         ]
         .concat(),
     )?;
+    let (flash, static_ram) = sizes()?;
+    println!(
+        "BOARD-SUMMARY {BIN}: flash {flash} B (budget {FLASH_BUDGET}), static RAM {static_ram} B \
+         (budget {STATIC_RAM_BUDGET})"
+    );
+    if flash > FLASH_BUDGET || static_ram > STATIC_RAM_BUDGET {
+        bail!("board binary over budget");
+    }
+    Ok(())
+}
+
+/// Builds the board binary and returns its flash (`.vector_table + .text + .rodata + .data`) and
+/// static RAM (`.data + .bss + .uninit`) in bytes.
+pub fn sizes() -> Result<(u64, u64)> {
+    let common = ["-p", PACKAGE, "--target", TARGET];
     cargo(&[&["build"][..], &common, &["--release"]].concat())?;
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let target_dir =
@@ -39,12 +54,5 @@ pub fn board() -> Result<()> {
     };
     let flash = size(".vector_table") + size(".text") + size(".rodata") + size(".data");
     let static_ram = size(".data") + size(".bss") + size(".uninit");
-    println!(
-        "BOARD-SUMMARY {BIN}: flash {flash} B (budget {FLASH_BUDGET}), static RAM {static_ram} B \
-         (budget {STATIC_RAM_BUDGET})"
-    );
-    if flash > FLASH_BUDGET || static_ram > STATIC_RAM_BUDGET {
-        bail!("board binary over budget");
-    }
-    Ok(())
+    Ok((flash, static_ram))
 }

@@ -4,10 +4,14 @@
 
 use anyhow::{Context, Result, bail};
 use std::path::Path;
+use tcomp_core::frame::MAX_FRAME_LEN;
 use tcomp_firmware::app::{
-    App, ChannelConfig, PERIOD_S, QMA_UG_PER_HZ, RLG_ARCSEC_PER_PULSE, Record,
+    App, ChannelConfig, PERIOD_S, QMA_UG_PER_HZ, RLG_ARCSEC_PER_PULSE, Record, status,
 };
-use tcomp_firmware::replay::{HEADER_LEN, MAGIC, VERSION, Vector};
+use tcomp_firmware::replay::{
+    COUNTER_FLAG_SHIFT, HANG, HEADER_LEN, MAGIC, STALL, TICK_HZ, TICKS_PER_PERIOD, VERSION, Vector,
+};
+use tcomp_firmware::timing::TimeCheck;
 use tcomp_firmware::{HASH_START, fold_hash};
 
 /// A column-addressable CSV.
@@ -60,17 +64,22 @@ pub struct Inputs {
     pub counters: Vec<Vec<u32>>,
     pub counter_start: Vec<u32>,
     pub counter_faults: Vec<Vec<bool>>,
+    /// Counter intervals the block flags (pulses lost: consumed, not counted).
+    pub counter_flagged: Vec<Vec<bool>>,
+    /// The board's injections per sample (`replay::STALL`, `TIME_GLITCH`, `HANG`).
+    pub board_faults: Vec<u32>,
 }
 
 impl Inputs {
     pub fn new(samples: usize) -> Self {
-        let _ = samples;
         Self {
             temps: vec![],
             therm_faults: vec![],
             counters: vec![],
             counter_start: vec![],
             counter_faults: vec![],
+            counter_flagged: vec![],
+            board_faults: vec![0; samples],
         }
     }
 
@@ -99,6 +108,7 @@ impl Inputs {
         self.counters.push(regs);
         self.counter_start.push(start);
         self.counter_faults.push(vec![false; rate.len()]);
+        self.counter_flagged.push(vec![false; rate.len()]);
         self.counters.len() - 1
     }
 
@@ -126,6 +136,10 @@ impl Inputs {
             for (c, f) in self.counter_faults.iter().enumerate() {
                 mask |= u32::from(f[i]) << (16 + c);
             }
+            for (c, f) in self.counter_flagged.iter().enumerate() {
+                mask |= u32::from(f[i]) << (COUNTER_FLAG_SHIFT as usize + c);
+            }
+            mask |= self.board_faults.get(i).copied().unwrap_or(0);
             b.extend_from_slice(&mask.to_le_bytes());
             for t in &self.temps {
                 b.extend_from_slice(&t[i].to_bits().to_le_bytes());
@@ -139,16 +153,31 @@ impl Inputs {
     }
 }
 
-/// Runs the firmware's loop on the host over `inputs` with `image`, and returns the finished vector
-/// (expected outputs filled in), the outputs, and their hash.
+/// A vector with the host's run of the firmware's loop over it.
+pub struct Built<const K: usize> {
+    /// The vector, expected outputs filled in.
+    pub bytes: Vec<u8>,
+    /// The loop's records per sample (before the board's bits).
+    pub outputs: Vec<[Record; K]>,
+    /// Their hash, as the firmware folds it.
+    pub hash: u32,
+    /// The frames the board must send, encoded, one per sample.
+    pub frames: Vec<Vec<u8>>,
+    /// Each frame's status words (the records' with the board's bits).
+    pub statuses: Vec<[u16; K]>,
+}
+
+/// Runs the firmware's loop on the host over `inputs` with `image` as the board runs it — after a
+/// `HANG` sample a fresh boot (new loop, models loaded again, counters latched anew) resumes with
+/// the next sample — and returns the finished vector with the outputs and frames to expect.
 pub fn build<const K: usize>(
     config_code: u16,
     config: &'static [ChannelConfig; K],
     inputs: &Inputs,
     image: &[u8],
-) -> Result<(Vec<u8>, Vec<[Record; K]>, u32)> {
+) -> Result<Built<K>> {
     let mut bytes = inputs.bytes(config_code, K);
-    let outputs = {
+    let (outputs, frames, statuses) = {
         let v = Vector::parse(&bytes).map_err(|e| anyhow::anyhow!("vector: {e:?}"))?;
         let mut app = App::new(config);
         for (c, r) in config.iter().zip(app.load(image)) {
@@ -157,15 +186,45 @@ pub fn build<const K: usize>(
             }
         }
         let mut board = v.board();
+        let mut check = TimeCheck::new(TICKS_PER_PERIOD);
+        let mut boot_flags = 0;
         let mut outputs = Vec::with_capacity(v.samples);
+        let mut frames = Vec::with_capacity(v.samples);
+        let mut statuses = Vec::with_capacity(v.samples);
+        let mut late = false;
         for n in 0..v.samples {
+            let injected = v.board_faults(n);
             v.load(n, &mut board);
             let (t, c) = board.sensors();
             let mut out = [Record::default(); K];
             app.sample(t, c, &mut out);
             outputs.push(out);
+            let mut flags = check.check(v.timestamp(n), 0) | boot_flags;
+            if late {
+                flags |= status::OVERRUN;
+            }
+            boot_flags = 0;
+            let mut with_flags = out;
+            for r in &mut with_flags {
+                r.status |= flags;
+            }
+            statuses.push(with_flags.map(|r| r.status));
+            let frame = app.frame(n as u32, v.timestamp(n), TICK_HZ, &with_flags);
+            let mut buf = [0u8; MAX_FRAME_LEN];
+            let len = frame
+                .encode(&mut buf)
+                .map_err(|e| anyhow::anyhow!("frame: {e}"))?;
+            frames.push(buf[..len].to_vec());
+            late = injected & STALL != 0;
+            if injected & HANG != 0 {
+                app.reset(config);
+                let _ = app.load(image);
+                board = v.board_at(n + 1);
+                check = TimeCheck::new(TICKS_PER_PERIOD);
+                boot_flags = status::WATCHDOG_RESET;
+            }
         }
-        outputs
+        (outputs, frames, statuses)
     };
     let mut hash = HASH_START;
     let tail = bytes.len() - outputs.len() * K * 8;
@@ -175,7 +234,13 @@ pub fn build<const K: usize>(
         bytes[at..at + 4].copy_from_slice(&rec.compensated.to_bits().to_le_bytes());
         bytes[at + 4..at + 8].copy_from_slice(&u32::from(rec.status).to_le_bytes());
     }
-    Ok((bytes, outputs, hash))
+    Ok(Built {
+        bytes,
+        outputs,
+        hash,
+        frames,
+        statuses,
+    })
 }
 
 /// Scales of the replayed counters (the firmware's channel configuration).
@@ -183,16 +248,17 @@ pub const RLG_PER_PULSE: f32 = RLG_ARCSEC_PER_PULSE;
 /// µg·s per QMA pulse.
 pub const QMA_PER_PULSE: f32 = QMA_UG_PER_HZ;
 
-/// Fails unless every sample in `range` of `channel` has all of `flags`.
+/// Fails unless every sample in `range` of `channel` has all of `flags` (in the frames' status
+/// words, which carry the board's bits too).
 pub fn expect_flag<const K: usize>(
-    outputs: &[[Record; K]],
+    outputs: &[[u16; K]],
     what: &str,
     channel: usize,
     range: std::ops::Range<usize>,
     flags: u16,
 ) -> Result<()> {
     for n in range {
-        let s = outputs[n][channel].status;
+        let s = outputs[n][channel];
         if s & flags != flags {
             bail!(
                 "fault `{what}` not flagged: sample {n} channel {channel} status {s:#x}, expected {flags:#x}"

@@ -58,7 +58,7 @@ mod app {
 
     #[local]
     struct Local {
-        app: App<'static>,
+        app: &'static mut App<'static>,
         thermometers: [setup::Thermometer; setup::THERMOMETERS],
         counters: Counters,
         timer: SampleTimer,
@@ -69,6 +69,9 @@ mod app {
     }
 
     #[init(local = [
+        // The loop's state (about 11 KB) lives in this static from the start (`App::new` is const):
+        // never built on the stack and moved.
+        app_state: App<'static> = App::new(&IMU6),
         queue: Queue<u8, { crate::TX_QUEUE }> = Queue::new(),
         spi1: Option<AtomicCell<Spi1Bus>> = None,
     ])]
@@ -93,7 +96,7 @@ mod app {
                 f.lr()
             );
         }
-        let mut app = App::new(&IMU6);
+        let app = cx.local.app_state;
         let loaded = app.load(crate::models_image());
         for (cfg, r) in IMU6.iter().zip(loaded.iter()) {
             match r {
