@@ -1,0 +1,164 @@
+//! The parser's promises that the operator tests do not reach: constant folding (values, and that a
+//! folded constant costs one node and never eats a signal's node), the nesting limit and its
+//! position, identifiers, and a message for every kind of error.
+//! Written to kill what `cargo mutants` found untested in `parse.rs`.
+#![allow(clippy::unwrap_used, missing_docs)]
+
+use tcomp_core::parse::{is_function, is_identifier, split_definition};
+use tcomp_core::{Op, ParseError, ParseErrorKind as K, ProgramBuilder, ProgramState};
+
+type B<'a> = ProgramBuilder<'a, 48, 8>;
+
+/// The feature values of a program of `lines` after one sample of `inputs`.
+fn values(lines: &[&'static str], inputs: &[f32]) -> Vec<f32> {
+    let mut b = B::new();
+    for l in lines {
+        b.line(l).unwrap();
+    }
+    let p = b.finish().unwrap();
+    let mut st = ProgramState::<48>::new();
+    st.step(&p, inputs, 1.0).unwrap();
+    let mut out = [0.0f32; 8];
+    st.features(&p, &mut out).unwrap();
+    out[..p.n_features()].to_vec()
+}
+
+#[test]
+fn constant_arithmetic_folds_to_one_node_with_the_right_value() {
+    for (expr, v) in [
+        ("1 + 2", 3.0f32),
+        ("7 - 2.5", 4.5),
+        ("2 * 3", 6.0),
+        ("3 / 4", 0.75),
+        ("1 - 2 - 3", -4.0),
+        ("(1 + 2) * (10 - 4) / 8", 2.25),
+        ("-(2 + 3)", -5.0),
+    ] {
+        let mut b = B::new();
+        b.feature(expr).unwrap();
+        let p = b.finish().unwrap();
+        assert_eq!(p.nodes.as_slice(), &[Op::Const(v)], "{expr}");
+    }
+}
+
+#[test]
+fn a_constant_next_to_a_column_stays_an_operation() {
+    let mut b = B::new();
+    b.feature("x + 2").unwrap();
+    let p = b.finish().unwrap();
+    assert_eq!(
+        p.nodes.as_slice(),
+        &[Op::Input(0), Op::Const(2.0), Op::Add(0, 1)]
+    );
+}
+
+#[test]
+fn folding_never_consumes_a_signal() {
+    // A constant signal's node belongs to the signal: an expression over it computes a new node
+    // and leaves the signal's value alone, whatever order the features come in.
+    assert_eq!(values(&["K = 5", "K * 2", "K"], &[]), [10.0, 5.0]);
+    assert_eq!(values(&["K = 5", "-K", "K"], &[]), [-5.0, 5.0]);
+    assert_eq!(values(&["K = 5", "K - 1", "K"], &[]), [4.0, 5.0]);
+}
+
+#[test]
+fn a_signal_is_not_a_constant_parameter() {
+    let mut b = B::new();
+    b.line("K = 5").unwrap();
+    let e = b.feature("lag(K, K)").unwrap_err();
+    assert_eq!((e.kind, e.start, e.end), (K::ConstantRequired, 7, 8));
+}
+
+#[test]
+fn nesting_up_to_the_limit_parses_and_one_more_is_too_deep() {
+    // The top-level expression is level 1 and each parenthesis one more: 23 pairs are level 24.
+    let nested = |k: usize| -> &'static str {
+        Box::leak(format!("{}x{}", "(".repeat(k), ")".repeat(k)).into_boxed_str())
+    };
+    let mut b = B::new();
+    b.feature(nested(23)).unwrap();
+    let mut b = B::new();
+    let e = b.feature(nested(24)).unwrap_err();
+    assert_eq!(e.kind, K::TooDeep);
+    // The error points at one character: where the 25th level starts.
+    assert_eq!((e.start, e.end), (24, 25));
+    // Unary minus counts as a level too.
+    let minus: &'static str = Box::leak(format!("{}x", "-".repeat(40)).into_boxed_str());
+    assert_eq!(B::new().feature(minus).unwrap_err().kind, K::TooDeep);
+    let minus: &'static str = Box::leak(format!("{}x", "-".repeat(20)).into_boxed_str());
+    B::new().feature(minus).unwrap();
+}
+
+#[test]
+fn depth_is_given_back_after_each_sub_expression() {
+    // Forty parenthesised terms side by side never nest deeper than two levels.
+    let flat: &'static str = Box::leak(vec!["(1)"; 40].join(" + ").into_boxed_str());
+    assert_eq!(values(&[flat], &[]), [40.0]);
+    let calls: &'static str = Box::leak(vec!["sq(x)"; 30].join(" + ").into_boxed_str());
+    let mut b = ProgramBuilder::<'static, 200, 8>::new();
+    b.feature(calls).unwrap();
+}
+
+#[test]
+fn identifiers_are_letters_digits_and_underscores_not_starting_with_a_digit() {
+    for ok in ["x", "_", "_t1", "t_anode_c", "T", "a9_Z"] {
+        assert!(is_identifier(ok), "{ok}");
+    }
+    for bad in ["", "1x", "9", "t-anode", "a b", "x.y", "é", "x=", "(x)"] {
+        assert!(!is_identifier(bad), "{bad:?}");
+    }
+    assert!(is_function("rate") && is_function("clamp") && !is_function("T"));
+    assert_eq!(split_definition("T = a + b"), Some(("T", 0, " a + b", 3)));
+    assert_eq!(split_definition("  G=a"), Some(("G", 2, "a", 4)));
+    assert_eq!(split_definition("1x = a"), None);
+    assert_eq!(split_definition("a + b"), None);
+}
+
+#[test]
+fn every_error_kind_has_its_own_message() {
+    let kinds = [
+        K::Empty,
+        K::UnexpectedChar,
+        K::UnexpectedEnd,
+        K::ExpectedOperand,
+        K::ExpectedCloseParen,
+        K::TrailingInput,
+        K::BadNumber,
+        K::UnknownFunction,
+        K::WrongArgCount,
+        K::ConstantRequired,
+        K::BadParameter,
+        K::TooDeep,
+        K::TooManyNodes,
+        K::TooManyInputs,
+        K::TooManyFeatures,
+        K::TooManySignals,
+        K::TooManyStateful,
+        K::DuplicateSignal,
+        K::BadName,
+    ];
+    let texts: Vec<String> = kinds
+        .iter()
+        .map(|&kind| {
+            ParseError {
+                start: 4,
+                end: 6,
+                kind,
+            }
+            .to_string()
+        })
+        .collect();
+    for (kind, t) in kinds.iter().zip(&texts) {
+        let message = t.strip_prefix("column 5: ").unwrap();
+        assert!(message.len() > 10, "{kind:?}: {t:?}");
+    }
+    for (i, a) in texts.iter().enumerate() {
+        for b in &texts[i + 1..] {
+            assert_ne!(a, b, "two kinds share a message");
+        }
+    }
+    // The two messages that teach the language name every function.
+    for f in ["sq", "abs", "mean", "rate", "lag", "hyst", "clamp"] {
+        assert!(texts[7].contains(f) && texts[8].contains(f), "{f}");
+    }
+}
