@@ -82,11 +82,12 @@ fn nesting_up_to_the_limit_parses_and_one_more_is_too_deep() {
     assert_eq!(e.kind, K::TooDeep);
     // The error points at one character: where the 25th level starts.
     assert_eq!((e.start, e.end), (24, 25));
-    // Unary minus counts as a level too.
-    let minus: &'static str = Box::leak(format!("{}x", "-".repeat(40)).into_boxed_str());
-    assert_eq!(B::new().feature(minus).unwrap_err().kind, K::TooDeep);
-    let minus: &'static str = Box::leak(format!("{}x", "-".repeat(20)).into_boxed_str());
-    B::new().feature(minus).unwrap();
+    // Unary minus counts as a level too: 23 of them are level 24.
+    let minus =
+        |k: usize| -> &'static str { Box::leak(format!("{}x", "-".repeat(k)).into_boxed_str()) };
+    B::new().feature(minus(23)).unwrap();
+    let e = B::new().feature(minus(24)).unwrap_err();
+    assert_eq!((e.kind, e.start, e.end), (K::TooDeep, 23, 24));
 }
 
 #[test]
@@ -94,6 +95,9 @@ fn depth_is_given_back_after_each_sub_expression() {
     // Forty parenthesised terms side by side never nest deeper than two levels.
     let flat: &'static str = Box::leak(vec!["(1)"; 40].join(" + ").into_boxed_str());
     assert_eq!(values(&[flat], &[]), [40.0]);
+    // 15 terms: 44 of the 48 nodes (each name reads its column into a node of its own).
+    let negated: &'static str = Box::leak(vec!["-x"; 15].join(" + ").into_boxed_str());
+    assert_eq!(values(&[negated], &[2.0]), [-30.0]);
     let calls: &'static str = Box::leak(vec!["sq(x)"; 30].join(" + ").into_boxed_str());
     let mut b = ProgramBuilder::<'static, 200, 8>::new();
     b.feature(calls).unwrap();
