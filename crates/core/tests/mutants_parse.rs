@@ -166,3 +166,187 @@ fn every_error_kind_has_its_own_message() {
         assert!(texts[7].contains(f) && texts[8].contains(f), "{f}");
     }
 }
+
+fn error(expr: &'static str) -> (K, u16, u16) {
+    let e = B::new().line(expr).unwrap_err();
+    (e.kind, e.start, e.end)
+}
+
+#[test]
+fn error_spans_cover_the_offending_text() {
+    assert_eq!(error("(a + b"), (K::ExpectedCloseParen, 6, 7));
+    assert_eq!(error("a + * b"), (K::ExpectedOperand, 4, 5));
+    assert_eq!(error("a + )"), (K::ExpectedOperand, 4, 5));
+    assert_eq!(error("$"), (K::UnexpectedChar, 0, 1));
+    assert_eq!(error("a $ b"), (K::UnexpectedChar, 2, 5));
+    assert_eq!(error("a b"), (K::TrailingInput, 2, 3));
+    assert_eq!(error("a + "), (K::UnexpectedEnd, 4, 4));
+    assert_eq!(error("foo(x)"), (K::UnknownFunction, 0, 3));
+    assert_eq!(error("1e999"), (K::BadNumber, 0, 5));
+    assert_eq!(error("1.2.3"), (K::BadNumber, 0, 5));
+    assert_eq!(error("lag(x)"), (K::WrongArgCount, 0, 6));
+    assert_eq!(error("lag(x, -3)"), (K::BadParameter, 7, 9));
+    assert_eq!(error("sq(x y)"), (K::UnexpectedChar, 5, 6));
+    assert_eq!(error("sq(x"), (K::ExpectedCloseParen, 4, 5));
+}
+
+#[test]
+fn numbers_in_every_notation() {
+    for (text, v) in [
+        ("2", 2.0f32),
+        ("0.25", 0.25),
+        (".5", 0.5),
+        ("1.5e-3", 1.5e-3),
+        ("2E+2", 200.0),
+        ("3e2", 300.0),
+        ("1e-40", 1e-40),
+    ] {
+        let mut b = B::new();
+        b.feature(text).unwrap();
+        assert_eq!(
+            b.finish().unwrap().nodes.as_slice(),
+            &[Op::Const(v)],
+            "{text}"
+        );
+    }
+}
+
+#[test]
+fn each_function_takes_its_number_of_arguments() {
+    for (expr, ok) in [
+        ("sq(x)", true),
+        ("sq(x, y)", false),
+        ("abs(x)", true),
+        ("abs(x, y)", false),
+        ("mean(x)", true),
+        ("mean(x, y, z, w)", true),
+        ("rate(x)", true),
+        ("rate(x, 30)", true),
+        ("rate(x, 30, 2)", false),
+        ("lag(x, 5)", true),
+        ("lag(x)", false),
+        ("lag(x, 5, 6)", false),
+        ("hyst(x, 0.1)", true),
+        ("hyst(x)", false),
+        ("clamp(x, 0, 1)", true),
+        ("clamp(x, 0)", false),
+        ("clamp(x, 0, 1, 2)", false),
+    ] {
+        match B::new().feature(expr) {
+            Ok(()) => assert!(ok, "{expr} accepted"),
+            Err(e) => assert!(!ok && e.kind == K::WrongArgCount, "{expr}: {:?}", e.kind),
+        }
+    }
+    // More arguments than the parser keeps (16) is a count error too, not a panic.
+    let many: &'static str =
+        Box::leak(format!("mean({})", vec!["x"; 17].join(", ")).into_boxed_str());
+    let mut b = ProgramBuilder::<'static, 200, 8>::new();
+    let e = b.feature(many).unwrap_err();
+    assert_eq!((e.kind, e.start), (K::WrongArgCount, 0));
+    assert!(e.end > e.start);
+}
+
+#[test]
+fn functions_compute_what_their_names_say() {
+    assert_eq!(
+        values(
+            &[
+                "sq(x)",
+                "abs(x)",
+                "mean(x, y, 4)",
+                "mean(y)",
+                "clamp(x, -1, 1)"
+            ],
+            &[-3.0, 5.0]
+        ),
+        [9.0, 3.0, 2.0, 5.0, -1.0]
+    );
+    // `mean` of one argument is that argument: no division node.
+    let mut b = B::new();
+    b.feature("mean(x)").unwrap();
+    assert_eq!(b.finish().unwrap().nodes.as_slice(), &[Op::Input(0)]);
+    let mut b = B::new();
+    b.feature("mean(x, y)").unwrap();
+    let p = b.finish().unwrap();
+    assert_eq!(
+        p.nodes.as_slice(),
+        &[
+            Op::Input(0),
+            Op::Input(1),
+            Op::Add(0, 1),
+            Op::Const(0.5),
+            Op::Mul(2, 3)
+        ]
+    );
+}
+
+#[test]
+fn stateful_functions_get_their_parameters_and_a_slot_each() {
+    let mut b = B::new();
+    b.feature("rate(x)").unwrap();
+    b.feature("rate(x, 30)").unwrap();
+    b.feature("lag(x, 5)").unwrap();
+    b.feature("hyst(x, 0)").unwrap();
+    b.feature("clamp(x, 2, 2)").unwrap();
+    let p = b.finish().unwrap();
+    let ops: Vec<Op> = p.features.iter().map(|&f| p.nodes[f as usize]).collect();
+    assert_eq!(
+        ops,
+        [
+            Op::Rate {
+                x: 0,
+                slot: 0,
+                window_s: 60.0
+            },
+            Op::Rate {
+                x: 2,
+                slot: 1,
+                window_s: 30.0
+            },
+            Op::Lag {
+                x: 4,
+                slot: 2,
+                tau_s: 5.0
+            },
+            Op::Hyst {
+                x: 6,
+                slot: 3,
+                threshold: 0.0
+            },
+            Op::Clamp {
+                x: 8,
+                lo: 2.0,
+                hi: 2.0
+            },
+        ]
+    );
+    for bad in ["rate(x, 0)", "lag(x, 0)", "hyst(x, -0.1)", "rate(x, -5)"] {
+        assert_eq!(error(bad).0, K::BadParameter, "{bad}");
+    }
+}
+
+#[test]
+fn eight_stateful_operators_fit_and_a_ninth_does_not() {
+    let mut b = B::new();
+    b.feature("lag(x, 1) + lag(x, 2) + lag(x, 3) + lag(x, 4)")
+        .unwrap();
+    b.feature("rate(x) + rate(x, 2) + hyst(x, 1) + lag(x, 5)")
+        .unwrap();
+    let e = b.feature("lag(x, 9)").unwrap_err();
+    assert_eq!((e.kind, e.start, e.end), (K::TooManyStateful, 0, 9));
+    assert_eq!(b.finish().unwrap().n_features(), 2);
+}
+
+#[test]
+fn a_name_is_a_signal_first_then_an_input_read_once_per_use() {
+    let mut b = B::new();
+    b.line("a = 2 * c").unwrap();
+    b.feature("a + b + c").unwrap();
+    let p = b.finish().unwrap();
+    assert_eq!(p.inputs.as_slice(), &["c", "b"]);
+    let mut st = ProgramState::<48>::new();
+    st.step(&p, &[10.0, 1.0], 1.0).unwrap();
+    let mut out = [0.0f32; 8];
+    st.features(&p, &mut out).unwrap();
+    assert_eq!(out[0], 20.0 + 1.0 + 10.0);
+}
