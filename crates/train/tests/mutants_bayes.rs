@@ -204,3 +204,26 @@ fn options_are_honoured() {
     assert!(default.evaluated > 5, "{}", default.evaluated);
     assert!(default.other_basis_log_evidence.is_none());
 }
+
+#[test]
+fn the_search_visits_at_least_its_fixed_steps() {
+    // Two features and 160 rows: the first pass fits the linear term alone (one width) and 4, 8,
+    // 16 and 32 centers at four widths each (17); a Gaussian model then walks each length scale
+    // (both neighbours of 1 and the far end: 3 each), the width (at least one neighbour), and
+    // refits the four other numbers of centers: at least 17 + 6 + 1 + 4 = 28 evidence fits.
+    let (x, _) = rows();
+    let f = fit(&x, &targets(&x, bump, 1.0, 0.0), &BayesOptions::default()).unwrap();
+    assert_eq!(f.basis, Basis::Gaussians);
+    assert!(f.evaluated >= 28, "{} fits", f.evaluated);
+}
+
+#[test]
+fn a_linear_truth_stays_linear_with_the_cubic_on_offer() {
+    // Parsimony orders the bases: the linear term alone, then the cubic, then Gaussians.
+    let (x, p) = rows();
+    let y = targets(&x, |r| 0.03 * r[0] - 0.2 * r[1], 1.0, 2.0);
+    let f = fit_offering_cubic(&x, &y, Some(&p), &BayesOptions::default()).unwrap();
+    assert_eq!(f.basis, Basis::Gaussians);
+    assert!(f.rbf.centers.is_empty(), "{} centers", f.rbf.centers.len());
+    assert!(f.other_basis_log_evidence.is_some());
+}
