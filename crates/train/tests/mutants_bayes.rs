@@ -227,3 +227,21 @@ fn a_linear_truth_stays_linear_with_the_cubic_on_offer() {
     assert!(f.rbf.centers.is_empty(), "{} centers", f.rbf.centers.len());
     assert!(f.other_basis_log_evidence.is_some());
 }
+
+#[test]
+fn each_prior_is_reported_for_its_own_group() {
+    // Eight Gaussians forced onto a linear truth: their weights are not needed, so their prior
+    // precision is far above that of the linear weights, which carry the whole signal.
+    let (x, _) = rows();
+    let y = targets(&x, |r| 0.03 * r[0] - 0.2 * r[1], 1.0, 2.0);
+    let opts = BayesOptions {
+        centers: Some(8),
+        ..BayesOptions::default()
+    };
+    let f = fit(&x, &y, &opts).unwrap();
+    let e = &f.evidence;
+    assert!(e.alpha_linear > 0.0, "{e:?}");
+    assert!(e.alpha > 100.0 * e.alpha_linear, "{e:?}");
+    // γ counts the bias and the two linear weights; the Gaussians add almost nothing.
+    assert!(e.gamma > 2.5 && e.gamma < 4.0, "{e:?}");
+}
