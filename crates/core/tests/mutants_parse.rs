@@ -95,6 +95,9 @@ fn depth_is_given_back_after_each_sub_expression() {
     // Forty parenthesised terms side by side never nest deeper than two levels.
     let flat: &'static str = Box::leak(vec!["(1)"; 40].join(" + ").into_boxed_str());
     assert_eq!(values(&[flat], &[]), [40.0]);
+    // Thirty negations side by side (folded into one constant) never nest deeper than two levels.
+    let negated: &'static str = Box::leak(vec!["-1"; 30].join(" + ").into_boxed_str());
+    assert_eq!(values(&[negated], &[]), [-30.0]);
     // 15 terms: 44 of the 48 nodes (each name reads its column into a node of its own).
     let negated: &'static str = Box::leak(vec!["-x"; 15].join(" + ").into_boxed_str());
     assert_eq!(values(&[negated], &[2.0]), [-30.0]);

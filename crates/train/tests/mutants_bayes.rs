@@ -245,3 +245,21 @@ fn each_prior_is_reported_for_its_own_group() {
     // γ counts the bias and the two linear weights; the Gaussians add almost nothing.
     assert!(e.gamma > 2.5 && e.gamma < 4.0, "{e:?}");
 }
+
+#[test]
+fn a_feature_enters_the_gaussians_only_when_its_effect_is_not_linear() {
+    // `bump` is linear in the second feature: its length scale goes to the far end (64), which
+    // leaves it to the linear term. A bump in the second feature brings it into the Gaussians.
+    let (x, _) = rows();
+    let f = fit(&x, &targets(&x, bump, 1.0, 0.0), &BayesOptions::default()).unwrap();
+    assert_eq!(f.length_scales.len(), 2);
+    assert_eq!(f.length_scales[1], 64.0, "{:?}", f.length_scales);
+    assert!(f.length_scales[0] < 64.0, "{:?}", f.length_scales);
+    let both = |r: &[f64]| bump(r) + 0.5 * (-(r[1] - 0.5) * (r[1] - 0.5) / 0.1).exp();
+    let g = fit(&x, &targets(&x, both, 1.0, 0.0), &BayesOptions::default()).unwrap();
+    assert!(
+        g.length_scales.iter().all(|l| *l < 64.0),
+        "{:?}",
+        g.length_scales
+    );
+}
