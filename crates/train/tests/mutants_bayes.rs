@@ -32,8 +32,9 @@ fn bump(r: &[f64]) -> f64 {
     0.5 * (-(r[0] - 15.0) * (r[0] - 15.0) / 30.0).exp() + 0.01 * r[0] + 0.2 * r[1]
 }
 
+/// A cubic in the first feature (the PX4 shape) and a linear effect of the second.
 fn cubic(r: &[f64]) -> f64 {
-    0.02 * r[0] - 4e-4 * r[0] * r[0] + 6e-6 * r[0] * r[0] * r[0]
+    0.02 * r[0] - 4e-4 * r[0] * r[0] + 6e-6 * r[0] * r[0] * r[0] + 0.1 * r[1]
 }
 
 fn targets(x: &[Vec<f64>], f: impl Fn(&[f64]) -> f64, k: f64, c: f64) -> Vec<f64> {
