@@ -41,14 +41,28 @@ fn a_structure_that_ends_early_under_a_matching_crc_is_truncated() {
 #[test]
 fn a_header_cut_inside_the_version_is_truncated() {
     assert_eq!(HostModel::decode(&MAGIC).unwrap_err(), BlobError::Truncated);
+    // The CRC is checked before the version, so the version cases carry a valid CRC.
+    let sealed = |tail: &[u8]| {
+        let mut v = MAGIC.to_vec();
+        v.extend_from_slice(tail);
+        let crc = crc32(&v);
+        v.extend_from_slice(&crc.to_le_bytes());
+        v
+    };
     // A varint continuation byte with nothing after it.
-    let mut v = MAGIC.to_vec();
-    v.push(0x80);
-    assert_eq!(HostModel::decode(&v).unwrap_err(), BlobError::Truncated);
+    assert_eq!(
+        HostModel::decode(&sealed(&[0x80])).unwrap_err(),
+        BlobError::Truncated
+    );
     // A version varint longer than a u16 is malformed, not truncated.
+    assert_eq!(
+        HostModel::decode(&sealed(&[0xFF, 0xFF, 0xFF, 0x01])).unwrap_err(),
+        BlobError::Malformed
+    );
+    // Without a CRC the same bytes are too short to be a blob.
     let mut v = MAGIC.to_vec();
     v.extend_from_slice(&[0xFF, 0xFF, 0xFF, 0x01]);
-    assert_eq!(HostModel::decode(&v).unwrap_err(), BlobError::Malformed);
+    assert_eq!(HostModel::decode(&v).unwrap_err(), BlobError::Truncated);
 }
 
 #[test]
