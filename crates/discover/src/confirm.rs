@@ -55,16 +55,7 @@ impl ConfirmOptions {
             why: "the bin of the held-out residual",
         }
         .check(self.heldout_bin_s)?;
-        tcomp_train::options::Bound {
-            flag: "folds",
-            key: "",
-            min: 2.0,
-            min_exclusive: false,
-            max: 100.0,
-            unit: "",
-            why: "contiguous blocks of the training run held out in turn",
-        }
-        .check_count(self.folds, "")?;
+        crate::score::FOLDS.check_count(self.folds, "")?;
         Ok(())
     }
 }

@@ -39,6 +39,18 @@ use tcomp_train::options::Bound;
 use tcomp_train::rbf64::Rbf64;
 use tcomp_train::{Dataset, Roles};
 
+/// The number of contiguous blocks in cross-validation on the training run: two at least (one to
+/// fit, one to predict); more than 100 leaves blocks of a few bins that say nothing.
+pub const FOLDS: Bound = Bound {
+    flag: "folds",
+    key: "",
+    min: 2.0,
+    min_exclusive: false,
+    max: 100.0,
+    unit: "",
+    why: "contiguous blocks of the training run held out in turn",
+};
+
 /// Scoring options.
 #[derive(Clone, Debug)]
 pub struct ScoreOptions {
@@ -83,18 +95,7 @@ impl ScoreOptions {
     pub fn validate(&self) -> std::result::Result<(), TrainError> {
         bin_bound("--bin").check(self.bin_s)?;
         bin_bound("heldout_bin_s").check(self.heldout_bin_s)?;
-        // Two blocks at least (one to fit, one to predict); more than 100 leaves blocks of a few
-        // bins that say nothing.
-        Bound {
-            flag: "folds",
-            key: "",
-            min: 2.0,
-            min_exclusive: false,
-            max: 100.0,
-            unit: "",
-            why: "contiguous blocks of the training run held out in turn",
-        }
-        .check_count(self.folds, "")?;
+        FOLDS.check_count(self.folds, "")?;
         if let Some(g) = self.gap_s {
             tcomp_train::options::GAP.check(g)?;
         }

@@ -44,15 +44,6 @@ pub fn sizes() -> Result<(u64, u64)> {
     let target_dir =
         std::env::var_os("CARGO_TARGET_DIR").map_or(root.join("target"), PathBuf::from);
     let elf = target_dir.join(TARGET).join("release").join(BIN);
-    let sizes = crate::elf::sections(&elf)?;
-    let size = |n: &str| {
-        sizes
-            .iter()
-            .filter(|(s, _)| s == n)
-            .map(|(_, v)| *v)
-            .sum::<u64>()
-    };
-    let flash = size(".vector_table") + size(".text") + size(".rodata") + size(".data");
-    let static_ram = size(".data") + size(".bss") + size(".uninit");
+    let (flash, static_ram) = crate::elf::flash_and_static_ram(&elf)?;
     Ok((flash, static_ram))
 }

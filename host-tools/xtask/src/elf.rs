@@ -15,6 +15,22 @@ fn u32_at(b: &[u8], at: usize) -> Option<u64> {
     )))
 }
 
+/// `(flash, static RAM)` of a firmware ELF: flash is .vector_table + .text + .rodata + .data (the
+/// initial values of .data live in flash), static RAM is .data + .bss + .uninit.
+pub fn flash_and_static_ram(path: &Path) -> Result<(u64, u64)> {
+    let sizes = sections(path)?;
+    let size = |n: &str| {
+        sizes
+            .iter()
+            .filter(|(s, _)| s == n)
+            .map(|(_, v)| *v)
+            .sum::<u64>()
+    };
+    let flash = size(".vector_table") + size(".text") + size(".rodata") + size(".data");
+    let static_ram = size(".data") + size(".bss") + size(".uninit");
+    Ok((flash, static_ram))
+}
+
 /// `(name, size)` of every section.
 pub fn sections(path: &Path) -> Result<Vec<(String, u64)>> {
     let b = std::fs::read(path).with_context(|| format!("{}", path.display()))?;

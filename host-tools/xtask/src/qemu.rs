@@ -520,16 +520,7 @@ pub fn qemu() -> Result<()> {
     }
     let (mean, worst) = timing.context("no imu6 run")?;
     println!("{frames} UART frames in all, decoded and identical to the host's");
-    let sizes = crate::elf::sections(&elf)?;
-    let size = |n: &str| {
-        sizes
-            .iter()
-            .filter(|(s, _)| s == n)
-            .map(|(_, v)| *v)
-            .sum::<u64>()
-    };
-    let flash = size(".vector_table") + size(".text") + size(".rodata") + size(".data");
-    let static_ram = size(".data") + size(".bss") + size(".uninit");
+    let (flash, static_ram) = crate::elf::flash_and_static_ram(&elf)?;
     let (board_flash, board_ram) = crate::board::sizes()?;
     let load = |i: u64| i as f64 * SAMPLE_HZ / CORE_HZ * 100.0;
     println!(
