@@ -307,7 +307,8 @@ fn snapshot_trait_latches_once_and_tells_flagged_from_unread() {
     let untouched = Interval::Counted(-1);
     let mut out = [untouched; 4];
 
-    block.read_snapshot(&mut out);
+    // 10 ticks of the 10 MHz timestamp clock since the baseline.
+    assert_eq!(block.read_snapshot(&mut out), Some(10.0 / 10.0e6));
     assert_eq!(
         out,
         [
@@ -317,11 +318,11 @@ fn snapshot_trait_latches_once_and_tells_flagged_from_unread() {
             untouched,
         ]
     );
-    block.read_snapshot(&mut out);
+    assert_eq!(block.read_snapshot(&mut out), None);
     assert_eq!(out[..3], [Interval::Unread(ErrorKind::Bus); 3]);
     assert_eq!(out[3], untouched);
-    // Nothing was consumed by the failed read.
-    block.read_snapshot(&mut out);
+    // Nothing was consumed by the failed read: counts and time both cover the two periods.
+    assert_eq!(block.read_snapshot(&mut out), Some(20.0 / 10.0e6));
     assert_eq!(
         out[..3],
         [
