@@ -18,7 +18,7 @@
 //! cause), resumes the vector after the hung sample with a fresh loop, and flags its first frame
 //! `WATCHDOG_RESET`. The run's counters live in no-init RAM too, so the summary covers both boots.
 //!
-//! SysTick counts instructions around `App::sample`: QEMU runs it with `-icount shift=3` (8 ns of
+//! SysTick counts instructions around `App::sample_snapshot`: QEMU runs it with `-icount shift=3` (8 ns of
 //! virtual time per instruction, a 125 MIPS core) and SysTick ticks at 25 MHz, so one tick is
 //! [`INSTRUCTIONS_PER_TICK`] = 5 instructions.
 #![no_std]
@@ -445,7 +445,7 @@ unsafe fn DefaultHandler(irqn: i16) {
     }
 }
 
-/// The watchdog's early warning: the loop has not fed it for two periods. Records the cause (the
+/// The watchdog's early warning: the loop has not fed it for three periods. Records the cause (the
 /// handler gets no exception frame from cortex-m-rt, so no PC); the watchdog's second expiry resets
 /// the board.
 #[exception]
