@@ -360,3 +360,23 @@ fn interval_from_result_follows_the_error_kind() {
     );
     spi.done();
 }
+
+#[test]
+fn snapshot_interval_only_when_every_channel_was_consumed_at_one_instant() {
+    let mut e = init_frames(&[0, 0], 0);
+    // Channel 0 alone consumed at 50,000 ticks; the snapshot at 100,000 then covers 5 ms for
+    // channel 0 and 10 ms for channel 1: no single interval. The next one does have one again.
+    e.extend(snapshot(0, 50_000, &[10, 20]));
+    e.extend(snapshot(0, 100_000, &[30, 40]));
+    e.extend(snapshot(0, 151_000, &[50, 60]));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 2> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    assert_eq!(block.read_channel(0).unwrap().ticks, 50_000);
+    let mut out = [Interval::Counted(0); 2];
+    assert_eq!(block.read_snapshot(&mut out), None);
+    assert_eq!(out, [Interval::Counted(20), Interval::Counted(40)]);
+    assert_eq!(block.read_snapshot(&mut out), Some(51_000.0 / 10.0e6));
+    assert_eq!(out, [Interval::Counted(20), Interval::Counted(20)]);
+    spi.done();
+}

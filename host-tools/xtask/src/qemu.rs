@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use tcomp_core::frame::Decoder;
-use tcomp_firmware::app::{IFOG1, IMU6, status};
+use tcomp_firmware::app::{IFOG1, IMU6, PERIOD_S, status};
 use tcomp_firmware::image::Image;
 use tcomp_firmware::replay::{CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TIME_GLITCH};
 
@@ -482,6 +482,17 @@ pub fn qemu() -> Result<()> {
     println!(
         "missed timer period (sample 3500 overruns past the next edge): 3502 covers two periods, flagged OVERRUN"
     );
+    // The rates divide by the latched (jittered) intervals, not the nominal period: most records
+    // of a valid count must carry an interval other than the nominal one.
+    let latched = out_a
+        .iter()
+        .flatten()
+        .filter(|r| r.periods > 0 && r.interval_s != PERIOD_S * f32::from(r.periods))
+        .count();
+    if latched < SAMPLES * IMU6.len() / 2 {
+        bail!("only {latched} IMU6 records were divided by a latched interval");
+    }
+    println!("rates from the latched interval: {latched} IMU6 records off the nominal period");
     println!("the loop goes on after every fault (checked above and frame by frame below)");
 
     let mut samples = 0;
