@@ -17,6 +17,11 @@
 //! * a counter interval the hardware flags (pulses lost, instrument or clock fault) was consumed: that
 //!   sample's raw value is NaN with [`status::SENSOR_ERROR`], and the next interval is one period
 //!   again ([`tcomp_hal::Interval`] tells the two apart);
+//! * the rate divides the counts by the interval the counter block's own timestamp latched with
+//!   them ([`CounterSnapshot::read_snapshot`]) when it is within [`INTERVAL_TOLERANCE`] of the
+//!   nominal periods it covers; otherwise by the nominal periods, flagged [`status::TIME_JUMP`];
+//! * timer periods the board missed altogether (an overrun longer than a period) are announced
+//!   with [`App::skip_periods`]: the next interval covers them, as after a bus error;
 //! * a channel whose blob is missing, corrupt or reads inputs it is not wired to runs with
 //!   `NO_MODEL`: raw value passed through, flagged.
 
@@ -40,6 +45,15 @@ pub type FwChannel = Channel<NODES, FEATURES>;
 
 /// The loop period: 200 Hz.
 pub const PERIOD_S: f32 = 0.005;
+/// Largest relative deviation of a latched interval from the nominal periods it covers that is
+/// still believed. The sample timer and the counter block's timestamp clock are crystals (tens of
+/// ppm) and the latch is a hardware edge, so a healthy interval is within 0.1 % of nominal even
+/// with a microsecond of latch jitter; 10 % (500 µs of a 5 ms period) leaves room for a board
+/// that latches from its interrupt rather than the timer's trigger output, yet is far below what
+/// a real fault looks like: a period gained or lost without being counted (±100 % of one
+/// period, ±50 % of two), a glitch of the timestamp counter (half a period in the QEMU run), a
+/// clock switch. Outside it the interval is not known, so the nominal one is used and flagged.
+pub const INTERVAL_TOLERANCE: f32 = 0.1;
 /// Identical readings in a row that mark a thermometer as stuck (2 s at 200 Hz).
 pub const STUCK_SAMPLES: u16 = 400;
 /// Most thermometers a configuration reads.
@@ -177,8 +191,21 @@ pub struct Record {
     pub correction: f32,
     /// The exact pulse count of the interval …
     pub counts: i32,
-    /// … and its length in loop periods (0: no valid count this sample).
+    /// … and its length in loop periods (0: no valid count this sample) …
     pub periods: u16,
+    /// … and in seconds, as the rate was computed: the latched interval, or the nominal periods
+    /// when there is none or it is implausible (0: no valid count).
+    pub interval_s: f32,
+}
+
+/// One counter's valid pulses this sample and the time they cover.
+#[derive(Clone, Copy, Debug)]
+struct Pulses {
+    counts: i32,
+    periods: u16,
+    interval_s: f32,
+    /// The latched interval was implausible: `interval_s` is the nominal one.
+    time_jump: bool,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -331,14 +358,16 @@ impl<'a> App<'a> {
             *i = Interval::from_result(c.read_delta());
         }
         let n = counters.len().min(MAX_COUNTERS);
-        self.step_all(intervals.get(..n).unwrap_or(&[]), out);
+        self.step_all(intervals.get(..n).unwrap_or(&[]), None, out);
     }
 
     /// One period with a counter block latched once for all channels ([`CounterSnapshot`]: one SPI
     /// frame, every instrument at the same instant): read all sensors, step all channels, write one
     /// record per channel into `out` (as many as both have). Counter `i` of the configuration is
     /// channel `i` of the block. The counters are latched first, a fixed latency after the timer
-    /// edge that started the period, and the thermometers read after.
+    /// edge that started the period, and the thermometers read after. The rates divide by the
+    /// interval the block latched with the counts when it is plausible (see
+    /// [`INTERVAL_TOLERANCE`]); otherwise by the nominal periods, flagged [`status::TIME_JUMP`].
     pub fn sample_snapshot<T: Thermometer, C: CounterSnapshot>(
         &mut self,
         thermometers: &mut [T],
@@ -346,9 +375,19 @@ impl<'a> App<'a> {
         out: &mut [Record],
     ) {
         let mut intervals = [Interval::Unread(ErrorKind::NotReady); MAX_COUNTERS];
-        counters.read_snapshot(&mut intervals);
+        let latched = counters.read_snapshot(&mut intervals);
         self.read_thermometers(thermometers);
-        self.step_all(&intervals, out);
+        self.step_all(&intervals, latched, out);
+    }
+
+    /// `n` whole timer periods passed without a sample (the sample interrupt was held off for
+    /// longer than a period): the counters kept counting, so the next read of every counter covers
+    /// them too and its rate is computed over all of them. Never merged silently: the board flags
+    /// the next frame ([`status::OVERRUN`]).
+    pub fn skip_periods(&mut self, n: u16) {
+        for m in &mut self.missed {
+            *m = m.saturating_add(n);
+        }
     }
 
     fn read_thermometers<T: Thermometer>(&mut self, thermometers: &mut [T]) {
@@ -385,15 +424,28 @@ impl<'a> App<'a> {
         }
     }
 
-    /// Turns each counter's interval into counts and the time they cover, then steps every channel.
-    fn step_all(&mut self, intervals: &[Interval], out: &mut [Record]) {
+    /// Turns each counter's interval into counts and the time they cover (`latched`: the
+    /// snapshot's own measure of it, seconds), then steps every channel.
+    fn step_all(&mut self, intervals: &[Interval], latched: Option<f32>, out: &mut [Record]) {
         // Counts and the interval they cover (longer after unread intervals); `None` when there is
         // no valid count this period.
         let mut pulses = [None; MAX_COUNTERS];
         for ((i, p), missed) in intervals.iter().zip(&mut pulses).zip(&mut self.missed) {
             match *i {
                 Interval::Counted(counts) => {
-                    *p = Some((counts, missed.saturating_add(1)));
+                    let periods = missed.saturating_add(1);
+                    let nominal = PERIOD_S * f32::from(periods);
+                    let (interval_s, time_jump) = match latched {
+                        Some(t) if plausible_interval(t, periods) => (t, false),
+                        Some(_) => (nominal, true),
+                        None => (nominal, false),
+                    };
+                    *p = Some(Pulses {
+                        counts,
+                        periods,
+                        interval_s,
+                        time_jump,
+                    });
                     *missed = 0;
                 }
                 // Consumed: those pulses are gone, the next interval is one period.
@@ -407,7 +459,7 @@ impl<'a> App<'a> {
         }
     }
 
-    fn step_channel(&mut self, k: usize, pulses: &[Option<(i32, u16)>; MAX_COUNTERS]) -> Record {
+    fn step_channel(&mut self, k: usize, pulses: &[Option<Pulses>; MAX_COUNTERS]) -> Record {
         let (Some(cfg), Some(channel), Some(map), Some(n)) = (
             self.config.get(k),
             self.channels.get_mut(k),
@@ -419,16 +471,19 @@ impl<'a> App<'a> {
         let mut flags = 0u16;
         let pulses = pulses.get(usize::from(cfg.counter)).copied().flatten();
         let raw = match pulses {
-            Some((counts, periods)) => cfg
-                .scale
-                .rate(counts, PERIOD_S * f32::from(periods))
-                .unwrap_or(f32::NAN),
+            Some(p) => {
+                if p.time_jump {
+                    flags |= status::TIME_JUMP;
+                }
+                cfg.scale.rate(p.counts, p.interval_s).unwrap_or(f32::NAN)
+            }
             None => {
                 flags |= status::SENSOR_ERROR;
                 f32::NAN
             }
         };
-        let (counts, periods) = pulses.unwrap_or((0, 0));
+        let (counts, periods, interval_s) =
+            pulses.map_or((0, 0, 0.0), |p| (p.counts, p.periods, p.interval_s));
         for &(_, t) in cfg.thermometers {
             if let Some(s) = self.therms.get(usize::from(t)) {
                 if s.error {
@@ -458,6 +513,7 @@ impl<'a> App<'a> {
             correction: o.correction,
             counts,
             periods,
+            interval_s,
         }
     }
 
@@ -483,7 +539,7 @@ impl<'a> App<'a> {
     }
 
     /// Channel `k`'s output at the sensor's full resolution, for the output frame:
-    /// `counts · per_pulse / interval − correction` in f64 from the record's exact pulse count (the
+    /// `counts · per_pulse / interval_s − correction` in f64 from the record's exact pulse count (the
     /// f32 [`Record::compensated`] steps by 0.031 °/h at 360,000 °/h; this by 10⁻¹⁰). NaN wherever
     /// `compensated` is NaN (no valid count, a NaN correction). See [`tcomp_core::frame`] for the
     /// error bound. Not on the loop's path: the QEMU replay compares the f32 records.
@@ -491,10 +547,10 @@ impl<'a> App<'a> {
         let Some(cfg) = self.config.get(k) else {
             return f64::NAN;
         };
-        if rec.compensated.is_nan() || rec.periods == 0 {
+        if rec.compensated.is_nan() || rec.periods == 0 || rec.interval_s <= 0.0 {
             return f64::NAN;
         }
-        let interval = f64::from(PERIOD_S) * f64::from(rec.periods);
+        let interval = f64::from(rec.interval_s);
         f64::from(rec.counts) * f64::from(cfg.scale.per_pulse()) / interval
             - f64::from(rec.correction)
     }
@@ -515,6 +571,13 @@ fn decode_into<'a>(slot: &mut Option<FwModel<'a>>, blob: &'a [u8]) -> Result<(),
 pub fn plausible_step(good: f32, v: f32, periods: u16) -> bool {
     let allowed = TEMP_STEP_MARGIN_C + MAX_TEMP_RATE_C_PER_S * PERIOD_S * f32::from(periods);
     good.is_nan() || (v - good).abs() <= allowed
+}
+
+/// Whether a latched interval of `latched` seconds may be the `periods` loop periods it is meant
+/// to cover: within [`INTERVAL_TOLERANCE`] of their nominal length (false for NaN).
+pub fn plausible_interval(latched: f32, periods: u16) -> bool {
+    let nominal = PERIOD_S * f32::from(periods);
+    (latched - nominal).abs() <= INTERVAL_TOLERANCE * nominal
 }
 
 #[cfg(test)]

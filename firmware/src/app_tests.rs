@@ -417,3 +417,103 @@ fn reset_in_place_equals_a_new_loop() {
     assert_eq!(used.config().len(), 1);
     assert_eq!(run(&mut used), run(&mut fresh));
 }
+
+/// A one-channel block (RLG x) whose snapshots latch `(timestamp, count)`, after a baseline at 0.
+fn rlg_block(snaps: &[(u32, u32)]) -> Vec<Tx<u8>> {
+    let mut e = id_frame();
+    e.extend(snapshot(0, 0, &[0]));
+    for &(t, c) in snaps {
+        e.extend(snapshot(0, t, &[c]));
+    }
+    e
+}
+
+#[test]
+fn the_rate_divides_by_the_latched_interval() {
+    // 1000 pulses over 5.1 ms (51,000 ticks of 10 MHz), then 1000 over exactly 5 ms.
+    let e = rlg_block(&[(51_000, 1_000), (101_000, 2_000)]);
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 1> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    let mut app = App::new(&IMU6);
+    let mut therms = thermometers();
+    let mut out = [Record::default(); MAX_CHANNELS];
+
+    app.sample_snapshot(&mut therms, &mut block, &mut out);
+    let expected = IMU6[0].scale.rate(1_000, 0.0051).unwrap();
+    assert_eq!(out[0].compensated, expected);
+    assert_ne!(out[0].compensated, one_period(0, 1_000));
+    assert_eq!(out[0].interval_s, 0.0051);
+    assert_eq!(out[0].status, status::NO_MODEL);
+    // The frame's value uses the same interval.
+    let exact = 1_000.0 * f64::from(IMU6[0].scale.per_pulse()) / f64::from(0.0051f32);
+    assert!((app.precise_value(0, &out[0]) - exact).abs() < 1e-9 * exact);
+
+    app.sample_snapshot(&mut therms, &mut block, &mut out);
+    assert_eq!(out[0].compensated, one_period(0, 1_000));
+    assert_eq!(out[0].status, status::NO_MODEL);
+    spi.done();
+}
+
+#[test]
+fn an_implausible_latched_interval_is_flagged_and_the_nominal_period_used() {
+    // 6 ms (+20 %) and 3.9 ms (−22 %) are both outside the tolerance; 5.4 ms (+8 %) is inside.
+    let e = rlg_block(&[(60_000, 1_000), (99_000, 2_000), (153_000, 3_000)]);
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 1> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    let mut app = App::new(&IMU6);
+    let mut therms = thermometers();
+    let mut out = [Record::default(); MAX_CHANNELS];
+
+    for _ in 0..2 {
+        app.sample_snapshot(&mut therms, &mut block, &mut out);
+        assert_eq!(out[0].compensated, one_period(0, 1_000));
+        assert_eq!(out[0].interval_s, PERIOD_S);
+        assert_eq!(out[0].status, status::NO_MODEL | status::TIME_JUMP);
+    }
+    app.sample_snapshot(&mut therms, &mut block, &mut out);
+    assert_eq!(
+        out[0].compensated,
+        IMU6[0].scale.rate(1_000, 0.0054).unwrap()
+    );
+    assert_eq!(out[0].status, status::NO_MODEL);
+    spi.done();
+}
+
+#[test]
+fn a_skipped_timer_period_is_covered_by_the_next_latched_interval() {
+    // The interrupt of the second period never ran: the next snapshot latches 2000 pulses over
+    // 10.01 ms. Announced, that is two periods at the latched interval; unannounced, it is a
+    // time jump (a whole period off).
+    for announce in [true, false] {
+        let e = rlg_block(&[(TICKS, 1_000), (3 * TICKS + 100, 3_000)]);
+        let mut spi = Mock::new(&e);
+        let mut block: CounterBlock<_, 1> = CounterBlock::new(spi.clone());
+        block.init().unwrap();
+        let mut app = App::new(&IMU6);
+        let mut therms = thermometers();
+        let mut out = [Record::default(); MAX_CHANNELS];
+
+        app.sample_snapshot(&mut therms, &mut block, &mut out);
+        assert_eq!(out[0].compensated, one_period(0, 1_000));
+        if announce {
+            app.skip_periods(1);
+        }
+        app.sample_snapshot(&mut therms, &mut block, &mut out);
+        assert_eq!(out[0].counts, 2_000);
+        if announce {
+            assert_eq!(out[0].periods, 2);
+            assert_eq!(
+                out[0].compensated,
+                IMU6[0].scale.rate(2_000, 0.01001).unwrap()
+            );
+            assert_eq!(out[0].status, status::NO_MODEL);
+        } else {
+            assert_eq!(out[0].periods, 1);
+            assert_eq!(out[0].compensated, one_period(0, 2_000));
+            assert_eq!(out[0].status, status::NO_MODEL | status::TIME_JUMP);
+        }
+        spi.done();
+    }
+}

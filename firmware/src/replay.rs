@@ -9,34 +9,45 @@
 //! ```text
 //! offset  size  field
 //! 0       4     magic b"TCRV"
-//! 4       2     version (1)
+//! 4       2     version (2)
 //! 6       2     configuration: 0 = IMU6 (3 RLG + 3 QMA), 1 = IFOG1
 //! 8       4     samples S
 //! 12      2     thermometers T
 //! 14      2     counters P
 //! 16      2     channels K
 //! 18      2     reserved (0)
-//! 20      4·P   counter registers before the first sample (u32)
-//! …       S × (4 + 4T + 4P)   per sample: fault mask u32 (bit i: thermometer i bus error,
+//! 20      4     timestamp latched with the counter registers before the first sample (u32)
+//! 24      4·P   counter registers before the first sample (u32)
+//! …       S × (8 + 4T + 4P)   per sample: fault mask u32 (bit i: thermometer i bus error,
 //!                             bit 16+j: counter j bus error, bit 22+j: counter j flags the
-//!                             interval, bits 28–30: the board's injections [`STALL`],
-//!                             [`TIME_GLITCH`], [`HANG`]), T temperatures (f32 °C, may be NaN),
-//!                             P counter registers (u32, free-running, wrapping)
+//!                             interval, bits 28–31: the board's injections [`STALL`],
+//!                             [`TIME_GLITCH`], [`HANG`], [`MISS`]), the timestamp the counter
+//!                             block latched at the sample's timer edge (u32 ticks of
+//!                             [`TICK_HZ`]: the nominal periods plus the jitter the vector
+//!                             carries), T temperatures (f32 °C, may be NaN), P counter registers
+//!                             (u32, free-running, wrapping)
 //! …       S × K × 8           expected output per sample and channel: compensated f32 bits (u32),
 //!                             status (u32)
 //! ```
+//!
+//! The counters are read as the counter block is, one latched snapshot per sample ([`Board::snapshot`],
+//! a [`CounterSnapshot`]), which returns the interval between the latched timestamps, so the loop
+//! divides by the time the vector's counts really cover. A vector's timestamps do not wrap (10,000
+//! samples are 1.25 · 10⁹ ticks of 2³²).
 //!
 //! A replayed NaN temperature is returned as `Ok(NaN)` on purpose, although the [`Thermometer`]
 //! contract promises finite values: it tests the loop's defence against a driver that breaks it.
 
 use crate::app::{MAX_COUNTERS, MAX_THERMOMETERS, Record};
-use tcomp_hal::{ErrorKind, ErrorType, PulseCounter, Thermometer, wrapping_delta};
+use tcomp_hal::{
+    CounterSnapshot, ErrorKind, ErrorType, Interval, PulseCounter, Thermometer, wrapping_delta,
+};
 
 /// The four bytes a vector starts with.
 pub const MAGIC: [u8; 4] = *b"TCRV";
 /// The vector format version.
-pub const VERSION: u16 = 1;
-/// Bytes before the initial counter values.
+pub const VERSION: u16 = 2;
+/// Bytes before the initial timestamp and counter values.
 pub const HEADER_LEN: usize = 20;
 /// Fault-mask bit: the sample task of this sample takes longer than a period (the next sample is
 /// late and flagged [`crate::app::status::OVERRUN`]).
@@ -47,6 +58,13 @@ pub const TIME_GLITCH: u32 = 1 << 29;
 /// Fault-mask bit: the loop hangs in this sample; the watchdog resets the board, which resumes with
 /// the next sample and flags [`crate::app::status::WATCHDOG_RESET`] on its first frame.
 pub const HANG: u32 = 1 << 30;
+/// Fault-mask bit: this sample's task overruns past the next timer edge (as a board whose sample
+/// interrupt was held off for more than a period): that edge is never served, its vector record
+/// is skipped (the counter block latched over it), and the sample after covers two periods, late
+/// and flagged [`crate::app::status::OVERRUN`].
+pub const MISS: u32 = 1 << 31;
+/// All the board-level injections.
+pub const BOARD_FAULTS: u32 = STALL | TIME_GLITCH | HANG | MISS;
 /// First fault-mask bit of the counters' flagged intervals (counter `j`: this bit shifted by `j`).
 pub const COUNTER_FLAG_SHIFT: u32 = 22;
 /// Timestamp ticks per loop period of the replayed time base (25 MHz, the board clock).
@@ -122,11 +140,11 @@ impl<'a> Vector<'a> {
 
     /// Bytes of one input record.
     pub fn record_len(&self) -> usize {
-        4 + 4 * self.thermometers + 4 * self.counters
+        8 + 4 * self.thermometers + 4 * self.counters
     }
 
     fn inputs_at(&self) -> usize {
-        HEADER_LEN + 4 * self.counters
+        HEADER_LEN + 4 + 4 * self.counters
     }
 
     fn expected_at(&self) -> usize {
@@ -148,15 +166,18 @@ impl<'a> Vector<'a> {
         }
     }
 
-    /// The board-level injections of sample `n` ([`STALL`], [`TIME_GLITCH`], [`HANG`]).
+    /// The board-level injections of sample `n` ([`BOARD_FAULTS`]).
     pub fn board_faults(&self, n: usize) -> u32 {
-        u32_at(self.bytes, self.inputs_at() + n * self.record_len()) & (STALL | TIME_GLITCH | HANG)
+        u32_at(self.bytes, self.inputs_at() + n * self.record_len()) & BOARD_FAULTS
     }
 
     /// The timestamp the counter block latched at sample `n`'s timer edge (ticks of [`TICK_HZ`]):
-    /// `n` periods, half a period late where [`TIME_GLITCH`] is injected.
+    /// the vector's, half a period late where [`TIME_GLITCH`] is injected.
     pub fn timestamp(&self, n: usize) -> u64 {
-        let t = n as u64 * TICKS_PER_PERIOD;
+        let t = u64::from(u32_at(
+            self.bytes,
+            self.inputs_at() + n * self.record_len() + 4,
+        ));
         if self.board_faults(n) & TIME_GLITCH != 0 {
             t + TICKS_PER_PERIOD / 2
         } else {
@@ -172,6 +193,7 @@ impl<'a> Vector<'a> {
             self.load(prev, &mut b);
             for c in b.counters.iter_mut() {
                 c.last = c.register;
+                c.last_ts = b.timestamp;
                 c.fault = false;
                 c.flagged = false;
             }
@@ -186,12 +208,14 @@ impl<'a> Vector<'a> {
             counters: [ReplayCounter::default(); MAX_COUNTERS],
             n_thermometers: self.thermometers,
             n_counters: self.counters,
+            timestamp: u64::from(u32_at(self.bytes, HEADER_LEN)),
         };
         for (j, c) in b.counters.iter_mut().take(self.counters).enumerate() {
-            let r = u32_at(self.bytes, HEADER_LEN + 4 * j);
+            let r = u32_at(self.bytes, HEADER_LEN + 4 + 4 * j);
             *c = ReplayCounter {
                 register: r,
                 last: r,
+                last_ts: b.timestamp,
                 fault: false,
                 flagged: false,
             };
@@ -203,6 +227,8 @@ impl<'a> Vector<'a> {
     pub fn load(&self, n: usize, board: &mut Board) {
         let at = self.inputs_at() + n * self.record_len();
         let faults = u32_at(self.bytes, at);
+        board.timestamp = self.timestamp(n);
+        let at = at + 4;
         for (i, t) in board
             .thermometers
             .iter_mut()
@@ -249,6 +275,8 @@ impl Thermometer for ReplayThermometer {
 pub struct ReplayCounter {
     register: u32,
     last: u32,
+    /// The timestamp latched with `last`.
+    last_ts: u64,
     fault: bool,
     flagged: bool,
 }
@@ -281,6 +309,38 @@ pub struct Board {
     counters: [ReplayCounter; MAX_COUNTERS],
     n_thermometers: usize,
     n_counters: usize,
+    /// The timestamp latched at the current sample's timer edge.
+    timestamp: u64,
+}
+
+/// The replayed counters as one latched snapshot (what the counter block gives a loop).
+#[derive(Debug)]
+pub struct ReplayBlock<'a> {
+    counters: &'a mut [ReplayCounter],
+    timestamp: u64,
+}
+
+/// Every counter read at the same latched timestamp. A counter that fails on the bus is not
+/// consumed (on the real block a bus error fails every channel; here one counter can, as a
+/// separate front end would). The interval returned is the one since the counters consumed now
+/// were last consumed, if that was at one instant for all of them (as [`tcomp_hal::pulse_counter`]
+/// decides for the block); otherwise `None`, and the loop uses the nominal periods.
+impl CounterSnapshot for ReplayBlock<'_> {
+    fn read_snapshot(&mut self, out: &mut [Interval]) -> Option<f32> {
+        let mut since: Option<u64> = None;
+        let mut same = true;
+        for (c, o) in self.counters.iter_mut().zip(out.iter_mut()) {
+            let last = c.last_ts;
+            *o = Interval::from_result(c.read_delta());
+            if !matches!(o, Interval::Unread(_)) {
+                c.last_ts = self.timestamp;
+                same &= since.is_none_or(|s| s == last);
+                since = Some(last);
+            }
+        }
+        let ticks = self.timestamp.wrapping_sub(since.filter(|_| same)?);
+        Some(ticks as f32 / TICK_HZ as f32)
+    }
 }
 
 impl Board {
@@ -293,6 +353,19 @@ impl Board {
         let c = self.counters.get_mut(..self.n_counters).unwrap_or(&mut []);
         (t, c)
     }
+
+    /// The thermometers, and the counters as one latched snapshot, as the loop reads them.
+    pub fn snapshot(&mut self) -> (&mut [ReplayThermometer], ReplayBlock<'_>) {
+        let timestamp = self.timestamp;
+        let (t, counters) = self.sensors();
+        (
+            t,
+            ReplayBlock {
+                counters,
+                timestamp,
+            },
+        )
+    }
 }
 
 #[cfg(test)]
@@ -302,8 +375,9 @@ mod tests {
     use super::*;
     use std::vec::Vec;
 
-    /// One counter, no thermometer, one channel: registers 100, 150, 230 from 0; sample 1's
-    /// interval flagged and its timestamp glitched.
+    /// One counter, no thermometer, one channel: registers 100, 150, 230 from 0, latched at 0 and
+    /// then one period apart (the first 100 ticks late); sample 1's interval flagged and its
+    /// timestamp glitched.
     fn vector() -> Vec<u8> {
         let mut b = Vec::new();
         b.extend_from_slice(&MAGIC);
@@ -314,12 +388,15 @@ mod tests {
             b.extend_from_slice(&v.to_le_bytes());
         }
         b.extend_from_slice(&0u32.to_le_bytes());
-        for (mask, reg) in [
-            (0u32, 100u32),
-            ((1 << COUNTER_FLAG_SHIFT) | TIME_GLITCH, 150),
-            (0, 230),
+        b.extend_from_slice(&0u32.to_le_bytes());
+        let t = TICKS_PER_PERIOD as u32;
+        for (mask, ts, reg) in [
+            (0u32, t + 100, 100u32),
+            ((1 << COUNTER_FLAG_SHIFT) | TIME_GLITCH, 2 * t, 150),
+            (0, 3 * t, 230),
         ] {
             b.extend_from_slice(&mask.to_le_bytes());
+            b.extend_from_slice(&ts.to_le_bytes());
             b.extend_from_slice(&reg.to_le_bytes());
         }
         b.resize(b.len() + 3 * 8, 0);
@@ -350,8 +427,52 @@ mod tests {
         let bytes = vector();
         let v = Vector::parse(&bytes).unwrap();
         let t: Vec<u64> = (0..3).map(|n| v.timestamp(n)).collect();
-        assert_eq!(t, [0, TICKS_PER_PERIOD * 3 / 2, 2 * TICKS_PER_PERIOD]);
+        let p = TICKS_PER_PERIOD;
+        assert_eq!(t, [p + 100, 2 * p + p / 2, 3 * p]);
         assert_eq!(v.board_faults(1), TIME_GLITCH);
         assert_eq!(v.board_faults(0), 0);
+    }
+
+    #[test]
+    fn the_snapshot_returns_the_latched_interval() {
+        let bytes = vector();
+        let v = Vector::parse(&bytes).unwrap();
+        let mut board = v.board();
+        let hz = TICK_HZ as f32;
+        let p = TICKS_PER_PERIOD as f32;
+        let mut got = Vec::new();
+        for n in 0..3 {
+            v.load(n, &mut board);
+            let mut out = [Interval::Unread(ErrorKind::NotReady); 1];
+            let latched = board.snapshot().1.read_snapshot(&mut out);
+            got.push((out[0], latched));
+        }
+        assert_eq!(
+            got,
+            [
+                (Interval::Counted(100), Some((p + 100.0) / hz)),
+                (
+                    Interval::Flagged(ErrorKind::Fault),
+                    Some((1.5 * p - 100.0) / hz)
+                ),
+                (Interval::Counted(80), Some(0.5 * p / hz)),
+            ]
+        );
+    }
+
+    #[test]
+    fn a_skipped_record_is_covered_by_the_next_snapshot() {
+        let bytes = vector();
+        let v = Vector::parse(&bytes).unwrap();
+        let mut board = v.board();
+        v.load(0, &mut board);
+        let mut out = [Interval::Unread(ErrorKind::NotReady); 1];
+        board.snapshot().1.read_snapshot(&mut out);
+        // Record 1 is never served: record 2 covers both periods, counts and time.
+        v.load(2, &mut board);
+        let latched = board.snapshot().1.read_snapshot(&mut out);
+        assert_eq!(out[0], Interval::Counted(130));
+        let ticks = (3 * TICKS_PER_PERIOD - TICKS_PER_PERIOD - 100) as f32;
+        assert_eq!(latched, Some(ticks / TICK_HZ as f32));
     }
 }

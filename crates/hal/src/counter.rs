@@ -87,13 +87,19 @@ impl Interval {
 pub trait CounterSnapshot {
     /// Latches every channel once and writes channel `i`'s [`Interval`] into `out[i]`, for as many
     /// channels as both have; a failed bus read makes every one of them [`Interval::Unread`].
-    fn read_snapshot(&mut self, out: &mut [Interval]);
+    ///
+    /// Returns the length of the latched interval in seconds, measured by the block's own
+    /// timestamp clock latched on the same edge as the counts: the time since the previous
+    /// snapshot that consumed the channels (so it covers the periods of any unread snapshot in
+    /// between, exactly as the counts do). `None` when the block cannot say (no timestamp, a failed
+    /// read, channels consumed at different instants); the loop then divides by the nominal period.
+    fn read_snapshot(&mut self, out: &mut [Interval]) -> Option<f32>;
 }
 
 impl<T: CounterSnapshot + ?Sized> CounterSnapshot for &mut T {
     #[inline]
-    fn read_snapshot(&mut self, out: &mut [Interval]) {
-        T::read_snapshot(self, out);
+    fn read_snapshot(&mut self, out: &mut [Interval]) -> Option<f32> {
+        T::read_snapshot(self, out)
     }
 }
 

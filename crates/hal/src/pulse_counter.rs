@@ -44,7 +44,9 @@
 //! two periods after a flagged one would halve the rate): [`CounterSnapshot::read_snapshot`] says it
 //! with [`Interval::Flagged`] / [`Interval::Unread`], and a [`PulseCounter`] handle's error kinds say
 //! the same ([`ErrorKind::Overflow`] and [`ErrorKind::Fault`] consumed, [`ErrorKind::Bus`] not; see
-//! [`Interval::from_result`]).
+//! [`Interval::from_result`]). The snapshot also returns the interval's length from the timestamp
+//! latched on the same edge as the counts, so the loop divides by the time that really elapsed
+//! rather than the nominal period.
 
 use core::fmt;
 
@@ -509,7 +511,7 @@ impl<SPI: SpiDevice, const N: usize> PulseCounter for Channel<'_, SPI, N> {
 
 /// The block as one latched snapshot per call: what a fixed-rate loop reads.
 impl<SPI: SpiDevice, const N: usize> CounterSnapshot for CounterBlock<SPI, N> {
-    fn read_snapshot(&mut self, out: &mut [Interval]) {
+    fn read_snapshot(&mut self, out: &mut [Interval]) -> Option<f32> {
         match self.sample() {
             Ok(sample) => {
                 for (o, reading) in out.iter_mut().zip(sample.channels.iter()) {
@@ -518,12 +520,21 @@ impl<SPI: SpiDevice, const N: usize> CounterSnapshot for CounterBlock<SPI, N> {
                         Err(kind) => Interval::Flagged(kind),
                     };
                 }
+                // One interval for the snapshot only if every channel was last consumed at the
+                // same instant (always so when the block is read by snapshots only).
+                let first = sample.channels.first()?.ticks;
+                if sample.channels.iter().all(|r| r.ticks == first) {
+                    sample.interval_s(0)
+                } else {
+                    None
+                }
             }
             Err(e) => {
                 let kind = error::Error::kind(&e);
                 for o in out.iter_mut().take(N) {
                     *o = Interval::Unread(kind);
                 }
+                None
             }
         }
     }

@@ -307,7 +307,8 @@ fn snapshot_trait_latches_once_and_tells_flagged_from_unread() {
     let untouched = Interval::Counted(-1);
     let mut out = [untouched; 4];
 
-    block.read_snapshot(&mut out);
+    // 10 ticks of the 10 MHz timestamp clock since the baseline.
+    assert_eq!(block.read_snapshot(&mut out), Some(10.0 / 10.0e6));
     assert_eq!(
         out,
         [
@@ -317,11 +318,11 @@ fn snapshot_trait_latches_once_and_tells_flagged_from_unread() {
             untouched,
         ]
     );
-    block.read_snapshot(&mut out);
+    assert_eq!(block.read_snapshot(&mut out), None);
     assert_eq!(out[..3], [Interval::Unread(ErrorKind::Bus); 3]);
     assert_eq!(out[3], untouched);
-    // Nothing was consumed by the failed read.
-    block.read_snapshot(&mut out);
+    // Nothing was consumed by the failed read: counts and time both cover the two periods.
+    assert_eq!(block.read_snapshot(&mut out), Some(20.0 / 10.0e6));
     assert_eq!(
         out[..3],
         [
@@ -357,5 +358,25 @@ fn interval_from_result_follows_the_error_kind() {
         Interval::from_result(Ok::<_, ErrorKind>(3)),
         Interval::Counted(3)
     );
+    spi.done();
+}
+
+#[test]
+fn snapshot_interval_only_when_every_channel_was_consumed_at_one_instant() {
+    let mut e = init_frames(&[0, 0], 0);
+    // Channel 0 alone consumed at 50,000 ticks; the snapshot at 100,000 then covers 5 ms for
+    // channel 0 and 10 ms for channel 1: no single interval. The next one does have one again.
+    e.extend(snapshot(0, 50_000, &[10, 20]));
+    e.extend(snapshot(0, 100_000, &[30, 40]));
+    e.extend(snapshot(0, 151_000, &[50, 60]));
+    let mut spi = Mock::new(&e);
+    let mut block: CounterBlock<_, 2> = CounterBlock::new(spi.clone());
+    block.init().unwrap();
+    assert_eq!(block.read_channel(0).unwrap().ticks, 50_000);
+    let mut out = [Interval::Counted(0); 2];
+    assert_eq!(block.read_snapshot(&mut out), None);
+    assert_eq!(out, [Interval::Counted(20), Interval::Counted(40)]);
+    assert_eq!(block.read_snapshot(&mut out), Some(51_000.0 / 10.0e6));
+    assert_eq!(out, [Interval::Counted(20), Interval::Counted(20)]);
     spi.done();
 }

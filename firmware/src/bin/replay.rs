@@ -6,8 +6,11 @@
 //! leaves over UART 0 as one of the core's binary frames, and the watchdog is fed once per sample.
 //! The sensors are the replay board's: the vector (loaded into `mps.ram` by QEMU's loader) says
 //! what the front ends latched at each timer edge, and which faults to inject, including those of
-//! the board itself — a sample that overruns its period, a glitch of the latched timestamp, and a
-//! hang that the watchdog must end. Semihosting only ends the run and carries the boot messages and
+//! the board itself — a sample that overruns its period, one that overruns past the next timer
+//! edge (a whole missed period: the board skips that edge's vector record, and the next sample's
+//! counts and latched interval cover both periods), a glitch of the latched timestamp, and a hang
+//! that the watchdog must end. The counters are read as one latched snapshot per sample, and the
+//! rates divided by the interval between the vector's latched timestamps. Semihosting only ends the run and carries the boot messages and
 //! the summary line (defmt): nothing is logged in the loop.
 //!
 //! A watchdog reset is survived like on a board: the watchdog's early-warning NMI writes a fault
@@ -15,7 +18,7 @@
 //! cause), resumes the vector after the hung sample with a fresh loop, and flags its first frame
 //! `WATCHDOG_RESET`. The run's counters live in no-init RAM too, so the summary covers both boots.
 //!
-//! SysTick counts instructions around `App::sample`: QEMU runs it with `-icount shift=3` (8 ns of
+//! SysTick counts instructions around `App::sample_snapshot`: QEMU runs it with `-icount shift=3` (8 ns of
 //! virtual time per instruction, a 125 MIPS core) and SysTick ticks at 25 MHz, so one tick is
 //! [`INSTRUCTIONS_PER_TICK`] = 5 instructions.
 #![no_std]
@@ -32,7 +35,7 @@ use tcomp_core::frame::MAX_FRAME_LEN;
 use tcomp_firmware::app::{App, ChannelConfig, IFOG1, IMU6, MAX_CHANNELS, Record, status};
 use tcomp_firmware::fault::{FaultKind, FaultRecord};
 use tcomp_firmware::replay::{
-    Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, STALL, TICK_HZ, TICKS_PER_PERIOD, Vector,
+    Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, Vector,
 };
 use tcomp_firmware::timing::TimeCheck;
 use tcomp_firmware::{
@@ -43,9 +46,10 @@ use tcomp_firmware::{
 const INSTRUCTIONS_PER_TICK: u32 = 5;
 /// Timer ticks per loop period: 25 MHz / 200 Hz.
 const PERIOD: u32 = TICKS_PER_PERIOD as u32;
-/// Watchdog ticks to its early warning (two periods: a sample may be late, never two periods);
-/// the reset follows after as many again.
-const WATCHDOG_TICKS: u32 = 2 * PERIOD;
+/// Watchdog ticks to its early warning (three periods: a sample may be late, or even miss the
+/// next timer edge, which is counted and flagged, but a loop that has not run for three periods
+/// hangs); the reset follows after as many again.
+const WATCHDOG_TICKS: u32 = 3 * PERIOD;
 /// Below the stack pointer at entry, this much stack is painted to measure the peak use.
 const PAINT_BYTES: usize = 32 * 1024;
 const PAINT: u32 = 0xA5A5_5A5A;
@@ -170,7 +174,8 @@ impl Loop {
         self.next_edge = self.next_edge.wrapping_add(PERIOD.wrapping_mul(missed + 1));
         let previous_edges = self.edges;
         self.edges += 1;
-        let n = self.run.next as usize;
+        // The vector's records of the missed edges are skipped: the counter block latched over them.
+        let n = self.run.next as usize + missed as usize;
         if n >= self.vector.samples {
             self.timer.stop();
             DONE.store(true, Ordering::Release);
@@ -181,9 +186,13 @@ impl Loop {
         let mut out = [Record::default(); MAX_CHANNELS];
         let k = self.config.len().min(MAX_CHANNELS);
         let out = out.get_mut(..k).unwrap_or(&mut []);
-        let (thermometers, counters) = self.board.sensors();
+        if missed > 0 {
+            self.app
+                .skip_periods(u16::try_from(missed).unwrap_or(u16::MAX));
+        }
+        let (thermometers, mut counters) = self.board.snapshot();
         let i0 = self.counter.now();
-        self.app.sample(thermometers, counters, out);
+        self.app.sample_snapshot(thermometers, &mut counters, out);
         let i1 = self.counter.now();
         let instr = self.counter.ticks_between(i0, i1) * INSTRUCTIONS_PER_TICK;
         let r = &mut *self.run;
@@ -225,7 +234,7 @@ impl Loop {
             self.uart.write_all(bytes.get(..len).unwrap_or(&[]));
         }
         r.samples += 1;
-        r.next += 1;
+        r.next = n as u32 + 1;
         if injected & HANG != 0 {
             // The loop hangs: only the watchdog gets the board out of here.
             #[allow(clippy::empty_loop)]
@@ -234,6 +243,10 @@ impl Loop {
         if injected & STALL != 0 {
             // This sample overruns its period by half a period: the next one is late.
             while self.time.now().wrapping_sub(entry) < PERIOD + PERIOD / 2 {}
+        }
+        if injected & MISS != 0 {
+            // This sample overruns past the next timer edge: that period is missed entirely.
+            while self.time.now().wrapping_sub(entry) < 2 * PERIOD + PERIOD / 2 {}
         }
     }
 }
@@ -432,7 +445,7 @@ unsafe fn DefaultHandler(irqn: i16) {
     }
 }
 
-/// The watchdog's early warning: the loop has not fed it for two periods. Records the cause (the
+/// The watchdog's early warning: the loop has not fed it for three periods. Records the cause (the
 /// handler gets no exception frame from cortex-m-rt, so no PC); the watchdog's second expiry resets
 /// the board.
 #[exception]

@@ -8,9 +8,9 @@ use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use tcomp_core::frame::Decoder;
-use tcomp_firmware::app::{IFOG1, IMU6, status};
+use tcomp_firmware::app::{IFOG1, IMU6, PERIOD_S, status};
 use tcomp_firmware::image::Image;
-use tcomp_firmware::replay::{CONFIG_IFOG1, CONFIG_IMU6, HANG, STALL, TIME_GLITCH};
+use tcomp_firmware::replay::{CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TIME_GLITCH};
 
 /// Budgets, from the issue and the part. Instructions: the worst 6-channel sample with every model
 /// evaluated every sample (no stagger): 11,360 measured. Flash: an STM32F405/407 has 1 MiB, less
@@ -170,18 +170,19 @@ fn compare_frames(capture: &[u8], expected: &[Vec<u8>]) -> Result<usize> {
         let len = f.encode(&mut buf).map_err(|e| anyhow::anyhow!("{e}"))?;
         let same = expected
             .get(f.sequence as usize)
-            .is_some_and(|e| e[..] == buf[..len]);
+            .is_some_and(|e| !e.is_empty() && e[..] == buf[..len]);
         if !same {
             mismatches += 1;
             first.get_or_insert(f.sequence);
         }
     }
-    if frames.len() != expected.len() || mismatches != 0 {
+    // Samples the board never served (a missed period) have no frame.
+    let want = expected.iter().filter(|e| !e.is_empty()).count();
+    if frames.len() != want || mismatches != 0 {
         bail!(
-            "UART frames differ from the host's: {} decoded of {} ({stats:?}), {mismatches} \
+            "UART frames differ from the host's: {} decoded of {want} ({stats:?}), {mismatches} \
              mismatches (first at sequence {first:?})",
             frames.len(),
-            expected.len()
         );
     }
     let sent: usize = expected.iter().map(Vec::len).sum();
@@ -361,6 +362,7 @@ pub fn qemu() -> Result<()> {
     imu.board_faults[1500] |= STALL; // sample 1500 overruns: 1501 is late
     imu.board_faults[2500] |= TIME_GLITCH; // 2500's timestamp is half a period off
     imu.board_faults[6000] |= HANG; // the loop hangs in 6000: the watchdog resets
+    imu.board_faults[3500] |= MISS; // 3500 overruns past 3501's edge: 3502 covers two periods
     let wrap_at = (1..SAMPLES)
         .find(|&n| imu.counters[0][n] < imu.counters[0][n - 1])
         .context("no wrap")?;
@@ -465,6 +467,32 @@ pub fn qemu() -> Result<()> {
     if after_flag.status & status::SENSOR_ERROR != 0 || after_flag.periods != 1 {
         bail!("RLG y after its flagged intervals: {after_flag:?}");
     }
+    // The missed period: record 3501 never served, 3502 covers both periods over their latched
+    // interval, flagged OVERRUN, no TIME_JUMP (the board counted the missed edge).
+    if a.served[3501] || !a.served[3502] {
+        bail!("the missed period did not skip exactly record 3501");
+    }
+    for k in 0..IMU6.len() {
+        let r = out_a[3502][k];
+        let s = sa[3502].map_or(0, |o| o[k]);
+        if r.periods != 2 || s & status::OVERRUN == 0 || s & status::TIME_JUMP != 0 {
+            bail!("channel {k} after the missed period: {r:?}, status {s:#x}");
+        }
+    }
+    println!(
+        "missed timer period (sample 3500 overruns past the next edge): 3502 covers two periods, flagged OVERRUN"
+    );
+    // The rates divide by the latched (jittered) intervals, not the nominal period: most records
+    // of a valid count must carry an interval other than the nominal one.
+    let latched = out_a
+        .iter()
+        .flatten()
+        .filter(|r| r.periods > 0 && r.interval_s != PERIOD_S * f32::from(r.periods))
+        .count();
+    if latched < SAMPLES * IMU6.len() / 2 {
+        bail!("only {latched} IMU6 records were divided by a latched interval");
+    }
+    println!("rates from the latched interval: {latched} IMU6 records off the nominal period");
     println!("the loop goes on after every fault (checked above and frame by frame below)");
 
     let mut samples = 0;
@@ -473,38 +501,47 @@ pub fn qemu() -> Result<()> {
     let mut timing = None;
     let mut stack = 0;
     /// Name, vector, image file, the host's hash, the host's frames.
-    type Run<'a> = (&'a str, &'a [u8], &'a str, u32, &'a [Vec<u8>]);
+    type Run<'a> = (&'a str, &'a [u8], &'a str, u32, &'a [Vec<u8>], &'a [bool]);
     let runs: [Run<'_>; 3] = [
-        ("imu6", &a.bytes, "models.bin", a.hash, &a.frames),
+        ("imu6", &a.bytes, "models.bin", a.hash, &a.frames, &a.served),
         (
             "imu6-corrupt-blob",
             &b.bytes,
             "models-corrupt.bin",
             b.hash,
             &b.frames,
+            &b.served,
         ),
-        ("ifog1", &c.bytes, "models.bin", c.hash, &c.frames),
+        (
+            "ifog1",
+            &c.bytes,
+            "models.bin",
+            c.hash,
+            &c.frames,
+            &c.served,
+        ),
     ];
-    for (name, bin, image, hash, expected) in runs {
+    for (name, bin, image, hash, expected, served) in runs {
         let path = work.join(format!("vector-{name}.bin"));
         let uart = work.join(format!("uart-{name}.bin"));
         std::fs::write(&path, bin)?;
         println!("--- QEMU replay: {name} ---");
         let text = run_qemu(&elf, &work.join(image), &path, &uart)?;
-        let s = check(&text, hash, SAMPLES)?;
+        let s = check(&text, hash, served.iter().filter(|&&s| s).count())?;
         let capture = std::fs::read(&uart).with_context(|| format!("{}", uart.display()))?;
         let n = compare_frames(&capture, expected)?;
         println!("{name}: {n} UART frames decoded, each identical to the host's");
-        // Both IMU6 runs replay the same inputs: one stalled sample and one hang each.
-        let (want_late, want_resets) = if name.starts_with("imu6") {
-            (1, 1)
+        // Both IMU6 runs replay the same inputs: one stalled sample, one missed period (its
+        // sample late too) and one hang each.
+        let (want_late, want_missed, want_resets) = if name.starts_with("imu6") {
+            (2, 1, 1)
         } else {
-            (0, 0)
+            (0, 0, 0)
         };
-        if s.late != want_late || s.missed != 0 || s.resets != want_resets {
+        if s.late != want_late || s.missed != want_missed || s.resets != want_resets {
             bail!(
                 "{name}: {} late samples, {} missed periods, {} watchdog resets; expected \
-                 {want_late}, 0, {want_resets}",
+                 {want_late}, {want_missed}, {want_resets}",
                 s.late,
                 s.missed,
                 s.resets

@@ -6,11 +6,26 @@ use anyhow::{Context, Result, bail};
 use std::path::Path;
 use tcomp_core::frame::MAX_FRAME_LEN;
 use tcomp_firmware::app::{
-    App, ChannelConfig, PERIOD_S, QMA_UG_PER_HZ, RLG_ARCSEC_PER_PULSE, Record, status,
+    App, ChannelConfig, QMA_UG_PER_HZ, RLG_ARCSEC_PER_PULSE, Record, status,
 };
 use tcomp_firmware::replay::{
-    COUNTER_FLAG_SHIFT, HANG, HEADER_LEN, MAGIC, STALL, TICK_HZ, TICKS_PER_PERIOD, VERSION, Vector,
+    COUNTER_FLAG_SHIFT, HANG, HEADER_LEN, MAGIC, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, VERSION,
+    Vector,
 };
+
+/// Largest jitter of the replayed latch instants, ticks of 25 MHz (±40 µs, ±0.8 % of a period):
+/// a board that latches the counter block from its interrupt rather than the timer's trigger
+/// output. Well inside the loop's tolerance for a latched interval (10 %), yet far above a
+/// count's resolution, so a loop that divided by the nominal period would show it.
+pub const LATCH_JITTER_TICKS: i64 = 1_000;
+
+/// The latch instant of sample `n`, ticks: `n + 1` periods after the initial latch at 0, with a
+/// deterministic pseudo-random jitter of up to ±[`LATCH_JITTER_TICKS`].
+fn latch_ticks(n: usize) -> u32 {
+    let h = ((n as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 33) as i64;
+    let jitter = h % (2 * LATCH_JITTER_TICKS + 1) - LATCH_JITTER_TICKS;
+    ((n as i64 + 1) * TICKS_PER_PERIOD as i64 + jitter) as u32
+}
 use tcomp_firmware::timing::TimeCheck;
 use tcomp_firmware::{HASH_START, fold_hash};
 
@@ -66,8 +81,10 @@ pub struct Inputs {
     pub counter_faults: Vec<Vec<bool>>,
     /// Counter intervals the block flags (pulses lost: consumed, not counted).
     pub counter_flagged: Vec<Vec<bool>>,
-    /// The board's injections per sample (`replay::STALL`, `TIME_GLITCH`, `HANG`).
+    /// The board's injections per sample (`replay::STALL`, `TIME_GLITCH`, `HANG`, `MISS`).
     pub board_faults: Vec<u32>,
+    /// The counter block's latch instants, ticks of 25 MHz (the one before the first sample is 0).
+    pub timestamps: Vec<u32>,
 }
 
 impl Inputs {
@@ -80,6 +97,7 @@ impl Inputs {
             counter_faults: vec![],
             counter_flagged: vec![],
             board_faults: vec![0; samples],
+            timestamps: (0..samples).map(latch_ticks).collect(),
         }
     }
 
@@ -93,15 +111,19 @@ impl Inputs {
         self.temps.len() - 1
     }
 
-    /// A free-running 32-bit counter integrating `rate` (°/h or µg) at `per_pulse`, starting at
-    /// `start` pulses before the register wraps through zero.
+    /// A free-running 32-bit counter integrating `rate` (°/h or µg) at `per_pulse` over the latched
+    /// intervals, starting at `start` pulses before the register wraps through zero.
     pub fn counter(&mut self, rate: &[f64], per_pulse: f32, wrap_after: u64) -> usize {
         let start = (0u64.wrapping_sub(wrap_after) & 0xFFFF_FFFF) as u32;
         let mut pulses = 0.0f64;
+        let mut last = 0u32;
         let regs = rate
             .iter()
-            .map(|r| {
-                pulses += r * f64::from(PERIOD_S) / f64::from(per_pulse);
+            .zip(&self.timestamps)
+            .map(|(r, &t)| {
+                let dt = f64::from(t.wrapping_sub(last)) / f64::from(TICK_HZ);
+                last = t;
+                pulses += r * dt / f64::from(per_pulse);
                 start.wrapping_add(pulses.floor() as i64 as u32)
             })
             .collect();
@@ -125,6 +147,7 @@ impl Inputs {
         b.extend_from_slice(&(channels as u16).to_le_bytes());
         b.extend_from_slice(&0u16.to_le_bytes());
         debug_assert_eq!(b.len(), HEADER_LEN);
+        b.extend_from_slice(&0u32.to_le_bytes());
         for s in &self.counter_start {
             b.extend_from_slice(&s.to_le_bytes());
         }
@@ -141,6 +164,7 @@ impl Inputs {
             }
             mask |= self.board_faults.get(i).copied().unwrap_or(0);
             b.extend_from_slice(&mask.to_le_bytes());
+            b.extend_from_slice(&self.timestamps[i].to_le_bytes());
             for t in &self.temps {
                 b.extend_from_slice(&t[i].to_bits().to_le_bytes());
             }
@@ -157,19 +181,22 @@ impl Inputs {
 pub struct Built<const K: usize> {
     /// The vector, expected outputs filled in.
     pub bytes: Vec<u8>,
-    /// The loop's records per sample (before the board's bits).
+    /// The loop's records per sample (before the board's bits; default where not served).
     pub outputs: Vec<[Record; K]>,
+    /// Whether the board serves each sample (false for a record skipped after a missed period).
+    pub served: Vec<bool>,
     /// Their hash, as the firmware folds it.
     pub hash: u32,
-    /// The frames the board must send, encoded, one per sample.
+    /// The frames the board must send, encoded, one per sample (empty where not served).
     pub frames: Vec<Vec<u8>>,
     /// Each frame's status words (the records' with the board's bits).
-    pub statuses: Vec<[u16; K]>,
+    pub statuses: Vec<Option<[u16; K]>>,
 }
 
 /// Runs the firmware's loop on the host over `inputs` with `image` as the board runs it — after a
 /// `HANG` sample a fresh boot (new loop, models loaded again, counters latched anew) resumes with
-/// the next sample — and returns the finished vector with the outputs and frames to expect.
+/// the next sample, after a `MISS` sample the next record is skipped and the one after covers two
+/// periods — and returns the finished vector with the outputs and frames to expect.
 pub fn build<const K: usize>(
     config_code: u16,
     config: &'static [ChannelConfig; K],
@@ -177,7 +204,7 @@ pub fn build<const K: usize>(
     image: &[u8],
 ) -> Result<Built<K>> {
     let mut bytes = inputs.bytes(config_code, K);
-    let (outputs, frames, statuses) = {
+    let (outputs, frames, statuses, served) = {
         let v = Vector::parse(&bytes).map_err(|e| anyhow::anyhow!("vector: {e:?}"))?;
         let mut app = App::new(config);
         for (c, r) in config.iter().zip(app.load(image)) {
@@ -191,15 +218,31 @@ pub fn build<const K: usize>(
         let mut outputs = Vec::with_capacity(v.samples);
         let mut frames = Vec::with_capacity(v.samples);
         let mut statuses = Vec::with_capacity(v.samples);
+        let mut served = Vec::with_capacity(v.samples);
         let mut late = false;
+        let mut skip = false;
+        let mut missed = 0;
         for n in 0..v.samples {
+            if skip {
+                // The board missed this record's timer edge altogether.
+                skip = false;
+                missed += 1;
+                outputs.push([Record::default(); K]);
+                frames.push(Vec::new());
+                statuses.push(None);
+                served.push(false);
+                continue;
+            }
             let injected = v.board_faults(n);
             v.load(n, &mut board);
-            let (t, c) = board.sensors();
+            app.skip_periods(missed);
+            let (t, mut c) = board.snapshot();
             let mut out = [Record::default(); K];
-            app.sample(t, c, &mut out);
+            app.sample_snapshot(t, &mut c, &mut out);
             outputs.push(out);
-            let mut flags = check.check(v.timestamp(n), 0) | boot_flags;
+            served.push(true);
+            let mut flags = check.check(v.timestamp(n), u32::from(missed)) | boot_flags;
+            missed = 0;
             if late {
                 flags |= status::OVERRUN;
             }
@@ -208,14 +251,15 @@ pub fn build<const K: usize>(
             for r in &mut with_flags {
                 r.status |= flags;
             }
-            statuses.push(with_flags.map(|r| r.status));
+            statuses.push(Some(with_flags.map(|r| r.status)));
             let frame = app.frame(n as u32, v.timestamp(n), TICK_HZ, &with_flags);
             let mut buf = [0u8; MAX_FRAME_LEN];
             let len = frame
                 .encode(&mut buf)
                 .map_err(|e| anyhow::anyhow!("frame: {e}"))?;
             frames.push(buf[..len].to_vec());
-            late = injected & STALL != 0;
+            late = injected & (STALL | MISS) != 0;
+            skip = injected & MISS != 0;
             if injected & HANG != 0 {
                 app.reset(config);
                 let _ = app.load(image);
@@ -224,12 +268,14 @@ pub fn build<const K: usize>(
                 boot_flags = status::WATCHDOG_RESET;
             }
         }
-        (outputs, frames, statuses)
+        (outputs, frames, statuses, served)
     };
     let mut hash = HASH_START;
     let tail = bytes.len() - outputs.len() * K * 8;
     for (i, rec) in outputs.iter().flatten().enumerate() {
-        hash = fold_hash(hash, rec);
+        if served[i / K] {
+            hash = fold_hash(hash, rec);
+        }
         let at = tail + i * 8;
         bytes[at..at + 4].copy_from_slice(&rec.compensated.to_bits().to_le_bytes());
         bytes[at + 4..at + 8].copy_from_slice(&u32::from(rec.status).to_le_bytes());
@@ -237,6 +283,7 @@ pub fn build<const K: usize>(
     Ok(Built {
         bytes,
         outputs,
+        served,
         hash,
         frames,
         statuses,
@@ -251,14 +298,16 @@ pub const QMA_PER_PULSE: f32 = QMA_UG_PER_HZ;
 /// Fails unless every sample in `range` of `channel` has all of `flags` (in the frames' status
 /// words, which carry the board's bits too).
 pub fn expect_flag<const K: usize>(
-    outputs: &[[u16; K]],
+    outputs: &[Option<[u16; K]>],
     what: &str,
     channel: usize,
     range: std::ops::Range<usize>,
     flags: u16,
 ) -> Result<()> {
     for n in range {
-        let s = outputs[n][channel];
+        let Some(s) = outputs[n].map(|o| o[channel]) else {
+            continue;
+        };
         if s & flags != flags {
             bail!(
                 "fault `{what}` not flagged: sample {n} channel {channel} status {s:#x}, expected {flags:#x}"
