@@ -4,7 +4,10 @@
 //!   block's snapshot, reads the thermometers, runs [`App::sample_snapshot`] (the very loop the
 //!   host tests and the QEMU replay run), encodes one [`Frame`] into the UART queue, feeds the
 //!   watchdog and counts overruns (TIM2's update flag set again before the work is done); the
-//!   next frame, the late one, carries `OVERRUN` on every channel.
+//!   next frame, the late one, carries `OVERRUN` on every channel. Whole missed periods (the
+//!   interrupt held off for more than one period, so TIM2's update events merged) are counted from
+//!   the DWT cycle counter and passed to [`App::skip_periods`], so the next rates cover every period
+//!   the counters counted, and the frame's timestamp skips them.
 //! * `uart` — bound to USART1 at a lower priority: drains the queue one byte per TXE interrupt.
 //!   A frame that does not fit in the queue is dropped whole; its sequence number is still used, so
 //!   the host sees the gap.
@@ -50,7 +53,9 @@ mod app {
     use tcomp_core::frame::MAX_FRAME_LEN;
     use tcomp_firmware::app::{App, IMU6, MAX_CHANNELS, Record, status};
 
-    use crate::setup::{self, Counters, FrameTx, SampleTimer, Spi1Bus, TICK_HZ, TICKS_PER_PERIOD};
+    use crate::setup::{
+        self, CYCLES_PER_PERIOD, Counters, FrameTx, SampleTimer, Spi1Bus, TICK_HZ, TICKS_PER_PERIOD,
+    };
     use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
     #[shared]
@@ -138,11 +143,33 @@ mod app {
     #[task(binds = TIM2, priority = 2, local = [
         app, thermometers, counters, timer, watchdog, producer,
         sequence: u32 = 0, periods: u64 = 0, overruns: u32 = 0, dropped: u32 = 0, late: bool = false,
+        missed: u32 = 0, last_cycles: Option<u32> = None,
     ])]
     fn sample(cx: sample::Context) {
         let l = cx.local;
         l.timer.clear_flags(Flag::Update);
         *l.periods += 1;
+        // Whole periods missed since the last entry (the interrupt held off for more than a period:
+        // TIM2's update events merged), counted from the cycle counter: the counters kept counting,
+        // so the loop is told to compute the next rates over all of them, never one period's.
+        let now = cortex_m::peripheral::DWT::cycle_count();
+        if let Some(last) = l.last_cycles.replace(now) {
+            let elapsed = now.wrapping_sub(last);
+            let periods = elapsed.saturating_add(CYCLES_PER_PERIOD / 2) / CYCLES_PER_PERIOD;
+            if periods >= 2 {
+                let skipped = periods - 1;
+                l.app
+                    .skip_periods(u16::try_from(skipped).unwrap_or(u16::MAX));
+                *l.periods += u64::from(skipped);
+                *l.missed = l.missed.wrapping_add(skipped);
+                *l.late = true;
+                defmt::warn!(
+                    "{=u32} timer periods missed ({=u32} in all)",
+                    skipped,
+                    *l.missed
+                );
+            }
+        }
 
         let mut records = [Record::default(); MAX_CHANNELS];
         l.app

@@ -40,6 +40,8 @@ pub const SYSCLK_HZ: u32 = 168_000_000;
 pub const TICK_HZ: u32 = 1_000_000;
 /// Sample-timer ticks per loop period (200 Hz).
 pub const TICKS_PER_PERIOD: u32 = 5_000;
+/// Core cycles per loop period: 168 MHz × 5 ms.
+pub const CYCLES_PER_PERIOD: u32 = SYSCLK_HZ / 1_000_000 * TICKS_PER_PERIOD;
 /// Thermometers on SPI1.
 pub const THERMOMETERS: usize = 12;
 /// Counter-block channels used.
@@ -95,7 +97,7 @@ pub enum SetupError {
 
 /// Configures the board. `spi1` is the static home of the thermometers' shared bus.
 pub fn setup(
-    core: cortex_m::Peripherals,
+    mut core: cortex_m::Peripherals,
     dp: pac::Peripherals,
     spi1: &'static mut Option<AtomicCell<Spi1Bus>>,
 ) -> Result<Devices, SetupError> {
@@ -108,6 +110,10 @@ pub fn setup(
             .pclk2(84.MHz()),
     );
     let mut delay = core.SYST.delay(&rcc.clocks);
+    // The cycle counter times the sample task's entries, so whole missed timer periods are counted
+    // (TIM2's update flag can say only that at least one period was late).
+    core.DCB.enable_trace();
+    core.DWT.enable_cycle_counter();
 
     let gpioa = dp.GPIOA.split(&mut rcc);
     let gpiob = dp.GPIOB.split(&mut rcc);
