@@ -25,6 +25,7 @@
 pub mod ads1220;
 pub mod counter;
 pub mod error;
+pub mod on_ready;
 pub mod pulse_counter;
 pub mod rtd;
 pub mod scale;
@@ -33,6 +34,7 @@ pub mod thermometer;
 
 pub use counter::{CounterSnapshot, Interval, PulseCounter, wrapping_delta};
 pub use error::{Error, ErrorKind, ErrorType};
+pub use on_ready::OnReady;
 pub use thermometer::Thermometer;
 
 /// `x` is a finite number greater than zero (false for NaN).

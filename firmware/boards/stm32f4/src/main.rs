@@ -113,9 +113,6 @@ mod app {
                 ),
             }
         }
-        // The DRDY lines stay configured as inputs; the loop reads each ADS1220's latest continuous
-        // conversion without waiting for them.
-        let _ = devices.drdy;
         let (producer, consumer) = cx.local.queue.split();
         (
             Shared {},

@@ -5,7 +5,7 @@
 //! |---|---|---|---|
 //! | clocks | RCC | 8 MHz crystal on OSC_IN/OSC_OUT (HSE) | SYSCLK 168 MHz (PLL), APB1 42 MHz, APB2 84 MHz |
 //! | sample timer | TIM2 (32-bit) | — | 1 MHz tick, update every 5,000 ticks (200 Hz) |
-//! | thermometers | SPI1, 12 × ADS1220 | SCK PA5, MISO PA6, MOSI PA7; CS PE0–PE11; DRDY PD0–PD11 (inputs) | mode 1, ≤ 5 MHz |
+//! | thermometers | SPI1, 12 × ADS1220 | SCK PA5, MISO PA6, MOSI PA7; CS PE0–PE11; DRDY PD0–PD11 (inputs: each conversion read once, when ready) | mode 1, ≤ 5 MHz |
 //! | counter block | SPI2, FPGA | SCK PB13, MISO PB14, MOSI PB15, CS PB12 | mode 0, ≤ 10 MHz |
 //! | frames out | USART1 TX | PA9 | 921,600 baud 8N1 |
 //! | watchdog | IWDG | — | 50 ms (ten periods) |
@@ -26,6 +26,7 @@ use stm32f4xx_hal::serial::{self, Tx};
 use stm32f4xx_hal::spi::Spi;
 use stm32f4xx_hal::timer::{CounterUs, Event};
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
+use tcomp_hal::OnReady;
 use tcomp_hal::ads1220::{Ads1220, Config as AdcConfig, Gain, IdacCurrent, RtdThermometer};
 use tcomp_hal::pulse_counter::CounterBlock;
 use tcomp_hal::rtd::Rtd;
@@ -58,7 +59,10 @@ pub type Spi1Bus = Spi<SPI1>;
 /// One thermometer: an ADS1220 measuring a 4-wire PT100, sharing SPI1 (an [`AtomicCell`]: the
 /// devices move into the sample task, so the bus must be `Sync`; a read while another holds it
 /// fails with `Busy` instead of corrupting it — it never happens, one task reads them all).
-pub type Thermometer = RtdThermometer<AtomicDevice<'static, Spi1Bus, AnyPin<Output>, NoDelay>>;
+/// Read through [`OnReady`]: each 20 SPS conversion once, when its DRDY line goes low, held in
+/// between (the loop runs at 200 Hz).
+pub type Thermometer =
+    OnReady<RtdThermometer<AtomicDevice<'static, Spi1Bus, AnyPin<Output>, NoDelay>>, AnyPin<Input>>;
 /// The counter block on SPI2.
 pub type Counters = CounterBlock<ExclusiveDevice<Spi<SPI2>, PB12<Output>, NoDelay>, COUNTERS>;
 /// The 200 Hz sample timer.
@@ -70,8 +74,6 @@ pub type FrameTx = Tx<USART1>;
 pub struct Devices {
     /// Thermometers, in the configuration's order.
     pub thermometers: [Thermometer; THERMOMETERS],
-    /// DRDY lines of the ADS1220s (inputs; the continuous 20 SPS conversions are read as they are).
-    pub drdy: [AnyPin<Input>; THERMOMETERS],
     /// The counter block.
     pub counters: Counters,
     /// The sample timer, running, update interrupt enabled.
@@ -128,35 +130,58 @@ pub fn setup(
         &mut rcc,
     );
     let bus: &'static AtomicCell<Spi1Bus> = spi1.insert(AtomicCell::new(bus));
-    let cs: [AnyPin<Output>; THERMOMETERS] = [
-        gpioe.pe0.into_push_pull_output().erase(),
-        gpioe.pe1.into_push_pull_output().erase(),
-        gpioe.pe2.into_push_pull_output().erase(),
-        gpioe.pe3.into_push_pull_output().erase(),
-        gpioe.pe4.into_push_pull_output().erase(),
-        gpioe.pe5.into_push_pull_output().erase(),
-        gpioe.pe6.into_push_pull_output().erase(),
-        gpioe.pe7.into_push_pull_output().erase(),
-        gpioe.pe8.into_push_pull_output().erase(),
-        gpioe.pe9.into_push_pull_output().erase(),
-        gpioe.pe10.into_push_pull_output().erase(),
-        gpioe.pe11.into_push_pull_output().erase(),
+    // Per thermometer: its chip select and its converter's DRDY line.
+    let pins: [(AnyPin<Output>, AnyPin<Input>); THERMOMETERS] = [
+        (
+            gpioe.pe0.into_push_pull_output().erase(),
+            gpiod.pd0.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe1.into_push_pull_output().erase(),
+            gpiod.pd1.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe2.into_push_pull_output().erase(),
+            gpiod.pd2.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe3.into_push_pull_output().erase(),
+            gpiod.pd3.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe4.into_push_pull_output().erase(),
+            gpiod.pd4.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe5.into_push_pull_output().erase(),
+            gpiod.pd5.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe6.into_push_pull_output().erase(),
+            gpiod.pd6.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe7.into_push_pull_output().erase(),
+            gpiod.pd7.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe8.into_push_pull_output().erase(),
+            gpiod.pd8.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe9.into_push_pull_output().erase(),
+            gpiod.pd9.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe10.into_push_pull_output().erase(),
+            gpiod.pd10.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe11.into_push_pull_output().erase(),
+            gpiod.pd11.into_pull_up_input().erase(),
+        ),
     ];
-    let drdy: [AnyPin<Input>; THERMOMETERS] = [
-        gpiod.pd0.into_pull_up_input().erase(),
-        gpiod.pd1.into_pull_up_input().erase(),
-        gpiod.pd2.into_pull_up_input().erase(),
-        gpiod.pd3.into_pull_up_input().erase(),
-        gpiod.pd4.into_pull_up_input().erase(),
-        gpiod.pd5.into_pull_up_input().erase(),
-        gpiod.pd6.into_pull_up_input().erase(),
-        gpiod.pd7.into_pull_up_input().erase(),
-        gpiod.pd8.into_pull_up_input().erase(),
-        gpiod.pd9.into_pull_up_input().erase(),
-        gpiod.pd10.into_pull_up_input().erase(),
-        gpiod.pd11.into_pull_up_input().erase(),
-    ];
-    let mut thermometers = cs.map(|mut pin| {
+    let mut thermometers = pins.map(|(mut pin, drdy)| {
         pin.set_high();
         // `new_no_delay` only drives CS high, which cannot fail on this pin (`Infallible`).
         let device = match AtomicDevice::new_no_delay(bus, pin) {
@@ -164,10 +189,10 @@ pub fn setup(
             Err(e) => match e {},
         };
         let adc = Ads1220::new(device, AdcConfig::rtd_4wire(IdacCurrent::Ua1000, Gain::G4));
-        RtdThermometer::new(adc, Rtd::PT100, R_REF_OHM)
+        OnReady::new(RtdThermometer::new(adc, Rtd::PT100, R_REF_OHM), drdy)
     });
     for (i, t) in thermometers.iter_mut().enumerate() {
-        if let Err(e) = t.init(&mut delay) {
+        if let Err(e) = t.inner_mut().init(&mut delay) {
             defmt::warn!(
                 "thermometer {=usize}: init failed ({}), its channels will flag SENSOR_ERROR",
                 i,
@@ -218,7 +243,6 @@ pub fn setup(
 
     Ok(Devices {
         thermometers,
-        drdy,
         counters,
         timer,
         tx,
