@@ -163,26 +163,32 @@ fn bus_error_carries_the_interval_to_the_next_read() {
     spi.done();
 }
 
+/// Pulses a period of each channel of [`six_channel_block`].
+const PER_PERIOD: [u32; 6] = [1_000, 2_000, 3_000, 400, 500, 600];
+
+/// The SPI traffic of a six-channel block: its identification, then one snapshot per entry of
+/// `statuses`, snapshot `n` at `n` periods with `n` periods' pulses of every channel (1,000, 2,000,
+/// 3,000, 400, 500, 600 a period) and block status `statuses[n]`.
+fn six_channel_block(statuses: &[u32]) -> Vec<Tx<u8>> {
+    let mut e = id_frame();
+    for (n, &status) in (0u32..).zip(statuses) {
+        let counts: Vec<u32> = PER_PERIOD.iter().map(|p| p * n).collect();
+        e.extend(snapshot(status, n * TICKS, &counts));
+    }
+    e
+}
+
 #[test]
 fn one_snapshot_per_sample_and_a_flagged_channel_alone() {
     // Six channels latched by one frame per sample; channel 4 (QMA y) is flagged FAULT in the
     // second interval, and channel 1 (RLG y) LOST in the third.
-    let per_period: [u32; 6] = [1_000, 2_000, 3_000, 400, 500, 600];
-    let at = |n: u32| -> Vec<u32> { per_period.iter().map(|p| p * n).collect() };
-    let mut e = id_frame();
-    e.extend(snapshot(0, 0, &at(0)));
-    e.extend(snapshot(0, TICKS, &at(1)));
-    e.extend(snapshot(
+    let e = six_channel_block(&[
+        0,
+        0,
         1 << (block_status::FAULT_SHIFT + 4),
-        2 * TICKS,
-        &at(2),
-    ));
-    e.extend(snapshot(
         1 << (block_status::LOST_SHIFT + 1),
-        3 * TICKS,
-        &at(3),
-    ));
-    e.extend(snapshot(0, 4 * TICKS, &at(4)));
+        0,
+    ]);
     let mut spi = Mock::new(&e);
     let mut block: CounterBlock<_, 6> = CounterBlock::new(spi.clone());
     block.init().unwrap();
@@ -198,7 +204,7 @@ fn one_snapshot_per_sample_and_a_flagged_channel_alone() {
                 assert!(rec.compensated.is_nan(), "channel {k}");
                 assert_eq!(rec.status, status::NO_MODEL | status::SENSOR_ERROR);
             } else {
-                let expected = one_period(k, per_period[k] as i32);
+                let expected = one_period(k, PER_PERIOD[k] as i32);
                 assert_eq!(rec.compensated, expected, "channel {k}");
                 assert_eq!(rec.status, status::NO_MODEL, "channel {k}");
             }
@@ -254,16 +260,7 @@ fn precise_value_keeps_the_pulse_resolution_at_high_rates() {
 fn frames_of_the_loop_decode_to_its_outputs() {
     // What the board does every period, on the host: latch, step, frame, encode; then the host's
     // decoder. Channel 2 is flagged in the second interval.
-    let per_period: [u32; 6] = [1_000, 2_000, 3_000, 400, 500, 600];
-    let at = |n: u32| -> Vec<u32> { per_period.iter().map(|p| p * n).collect() };
-    let mut e = id_frame();
-    e.extend(snapshot(0, 0, &at(0)));
-    e.extend(snapshot(0, TICKS, &at(1)));
-    e.extend(snapshot(
-        1 << (block_status::LOST_SHIFT + 2),
-        2 * TICKS,
-        &at(2),
-    ));
+    let e = six_channel_block(&[0, 0, 1 << (block_status::LOST_SHIFT + 2)]);
     let mut spi = Mock::new(&e);
     let mut block: CounterBlock<_, 6> = CounterBlock::new(spi.clone());
     block.init().unwrap();
@@ -294,7 +291,7 @@ fn frames_of_the_loop_decode_to_its_outputs() {
             } else {
                 assert_eq!(c.value, expected, "channel {k}");
                 // The f64 value is the exact count over one period (no model: no correction).
-                let exact = f64::from(per_period[k]) * f64::from(IMU6[k].scale.per_pulse())
+                let exact = f64::from(PER_PERIOD[k]) * f64::from(IMU6[k].scale.per_pulse())
                     / f64::from(PERIOD_S);
                 assert!(
                     (c.value - exact).abs() <= 1e-12 * exact.abs(),
