@@ -32,14 +32,12 @@ pub use verdict::{Criterion, Verdict};
 
 use serde::Serialize;
 use std::time::Instant;
-use tcomp_core::Model;
-use tcomp_train::features::{F, FeatureSpec, N};
+use tcomp_train::features::FeatureSpec;
 use tcomp_train::metrics::{self, Run};
-use tcomp_train::rbf64::C;
 use tcomp_train::{Dataset, Roles};
 
-/// A decoded model blob as the host reads it.
-pub type HostModel<'a> = Model<'a, C, F, N>;
+/// A decoded model blob as the host reads it (the core's one alias at the host capacities).
+pub use tcomp_core::HostModel;
 
 /// What diagnosis needs to know about a model: its program's source and column roles.
 #[derive(Clone, Debug)]

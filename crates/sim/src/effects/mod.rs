@@ -213,6 +213,14 @@ pub struct EffectTruth {
     pub contribution_p2p: f64,
 }
 
+impl EffectTruth {
+    /// The effect this entry describes (`None` for a name outside the vocabulary, which only a
+    /// hand-edited truth file can have).
+    pub fn kind(&self) -> Option<EffectKind> {
+        EffectKind::from_name(&self.name)
+    }
+}
+
 /// The terms of one effect's truth entry, before the run's statistics.
 pub(crate) struct Terms {
     /// One coefficient per expression.
