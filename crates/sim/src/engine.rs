@@ -13,6 +13,9 @@
 //!    `dt = step_s` (so the truth expressions are exact over the file); the true output integral over
 //!    the row (reference + bias + noise) feeds the pulse counter; the quantised, rounded output is
 //!    written, and `output − reference − bias` is the noise actually drawn.
+//!
+//! Parts: [`Physics`] (step 1), the effects' states (step 2's bias), `output` (the counter, the
+//! reference and the statistics of the noise drawn), `record` (the truth of the finished run).
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -20,7 +23,7 @@ use rand_distr::StandardNormal;
 
 use crate::effects::{Context, EffectState, EffectTruth, RowInputs};
 use crate::error::Result;
-use crate::noise::{BinnedStd, GaussMarkov, PulseCounter, Running};
+use crate::noise::{GaussMarkov, Running};
 use crate::profile::ProfileCursor;
 use crate::scenario::Scenario;
 use crate::sensor::SensorExt;
@@ -28,7 +31,10 @@ use crate::thermal::{FohLag, SelfHeating, ThermometerSpec, quantise};
 use crate::truth::Truth;
 use crate::writer::RowSink;
 
+mod output;
 mod record;
+
+use output::{Drawn, Output};
 
 const TIME_DECIMALS: usize = 4;
 const TEMP_DECIMALS: usize = 4;
@@ -275,67 +281,6 @@ impl Effects {
             t.contribution_p2p = s.p2p();
         }
         (self.truth, self.bias)
-    }
-}
-
-/// Statistics of the noise actually drawn.
-struct Drawn {
-    white: Running,
-    gm: Running,
-    quant: Running,
-    total: Running,
-    bin100: BinnedStd,
-    bin1000: BinnedStd,
-}
-
-impl Drawn {
-    fn new(h: f64) -> Self {
-        Drawn {
-            white: Running::default(),
-            gm: Running::default(),
-            quant: Running::default(),
-            total: Running::default(),
-            bin100: BinnedStd::new(100.0, h),
-            bin1000: BinnedStd::new(1000.0, h),
-        }
-    }
-}
-
-/// The output side of one row: the pulse counter and the constant reference.
-struct Output {
-    counter: PulseCounter,
-    reference: f64,
-    decimals: usize,
-}
-
-impl Output {
-    /// The counter's phase comes from a second generator, so it draws nothing from the main one.
-    fn new(sc: &Scenario) -> Self {
-        let phase = {
-            let mut r2 = ChaCha8Rng::seed_from_u64(sc.seed ^ 0x5eed_9a15_e000_0001);
-            r2.random_range(0.0..1.0)
-        };
-        let decimals = sc.sensor.output_decimals();
-        Output {
-            counter: PulseCounter::new(sc.noise.pulse_weight, phase),
-            reference: round_dec(sc.reference, decimals),
-            decimals,
-        }
-    }
-
-    /// The recorded output of a row with `bias` and the row's mean noise; the drawn noise is
-    /// recorded in `drawn`.
-    fn step(&mut self, m: &RowMeans, bias: f64, h: f64, drawn: &mut Drawn) -> f64 {
-        let analog = self.reference + bias + m.white + m.gm;
-        let out = round_dec(self.counter.step(analog, h), self.decimals);
-        let noise = out - self.reference - bias;
-        drawn.white.push(m.white);
-        drawn.gm.push(m.gm);
-        drawn.quant.push(out - analog);
-        drawn.total.push(noise);
-        drawn.bin100.push(m.time, noise);
-        drawn.bin1000.push(m.time, noise);
-        out
     }
 }
 

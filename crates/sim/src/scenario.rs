@@ -85,6 +85,23 @@ pub struct SupplySpec {
     pub noise_v: f64,
 }
 
+impl SupplySpec {
+    /// Checks every field; the error names the first bad one (`supply.<field>`).
+    pub fn validate(&self) -> Result<()> {
+        if !self.nominal_v.is_finite() {
+            return Err(Error::invalid("supply.nominal_v", "must be finite"));
+        }
+        if !(self.wander_v.is_finite() && self.wander_v >= 0.0) {
+            return Err(Error::invalid("supply.wander_v", "must be >= 0"));
+        }
+        Error::positive("supply.wander_tau_s", self.wander_tau_s)?;
+        if !(self.noise_v.is_finite() && self.noise_v >= 0.0) {
+            return Err(Error::invalid("supply.noise_v", "must be >= 0"));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SupplySpec {
     fn default() -> Self {
         SupplySpec {
@@ -239,7 +256,29 @@ impl Scenario {
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
         check_simulated(self.sensor, "sensor.kind")?;
-        let pos = |v: f64, f: &str| Error::positive(f, v);
+        self.validate_rate_and_step()?;
+        if !self.reference.is_finite() {
+            return Err(Error::invalid("sensor.reference", "must be finite"));
+        }
+        self.profile.validate("profile")?;
+        self.validate_size()?;
+        self.validate_thermometers()?;
+        self.noise.validate("noise")?;
+        self.supply.validate()?;
+        let (names, unit) = self.context();
+        let ctx = Context {
+            sensor: self.sensor,
+            therm_names: &names,
+            unit,
+        };
+        for (i, e) in self.effects.iter().enumerate() {
+            e.validate(&ctx, &format!("effects[{i}]"))?;
+        }
+        Ok(())
+    }
+
+    /// The internal rate, and the output step as a whole number of its periods.
+    fn validate_rate_and_step(&self) -> Result<()> {
         if !(self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= MAX_RATE_HZ) {
             return Err(Error::invalid(
                 "rate_hz",
@@ -272,10 +311,12 @@ impl Scenario {
                 ),
             ));
         }
-        if !self.reference.is_finite() {
-            return Err(Error::invalid("sensor.reference", "must be finite"));
-        }
-        self.profile.validate("profile")?;
+        Ok(())
+    }
+
+    /// The run's size: at least one row, at most [`MAX_ROWS`] rows and [`MAX_INTERNAL_SAMPLES`]
+    /// internal samples.
+    fn validate_size(&self) -> Result<()> {
         if self.profile.duration_s() < self.step_s {
             return Err(Error::invalid(
                 "step_s",
@@ -311,6 +352,11 @@ impl Scenario {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// The thermometers: the sensor's own, in order, each with sane parameters.
+    fn validate_thermometers(&self) -> Result<()> {
         let expect: Vec<String> = self
             .sensor
             .default_thermometers()
@@ -331,27 +377,6 @@ impl Scenario {
         }
         for t in &self.thermometers {
             t.validate(&format!("sensor.thermal.{}", t.name))?;
-        }
-        self.noise.validate("noise")?;
-        let s = &self.supply;
-        if !s.nominal_v.is_finite() {
-            return Err(Error::invalid("supply.nominal_v", "must be finite"));
-        }
-        if !(s.wander_v.is_finite() && s.wander_v >= 0.0) {
-            return Err(Error::invalid("supply.wander_v", "must be >= 0"));
-        }
-        pos(s.wander_tau_s, "supply.wander_tau_s")?;
-        if !(s.noise_v.is_finite() && s.noise_v >= 0.0) {
-            return Err(Error::invalid("supply.noise_v", "must be >= 0"));
-        }
-        let (names, unit) = self.context();
-        let ctx = Context {
-            sensor: self.sensor,
-            therm_names: &names,
-            unit,
-        };
-        for (i, e) in self.effects.iter().enumerate() {
-            e.validate(&ctx, &format!("effects[{i}]"))?;
         }
         Ok(())
     }
