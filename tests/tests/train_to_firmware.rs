@@ -3,7 +3,9 @@
 //! with bit-identical outputs while the error falls.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use tcomp_core::{Channel, FLIGHT_CENTERS, FLIGHT_FEATURES, FLIGHT_NODES, Model, Status};
+use tcomp_core::{
+    Channel, FLIGHT_CENTERS, FLIGHT_FEATURES, FLIGHT_NODES, HostModel, Model, Status,
+};
 use tcomp_sim::presets;
 use tcomp_train::{Dataset, FitOptions, fit};
 
@@ -36,7 +38,7 @@ fn host_trained_blob_flies_bit_exact_in_firmware_sized_types() {
     let fitted = fit(&train, &opts).unwrap();
     let blob = fitted.model.to_bytes().unwrap();
 
-    let host = Model::<'_, 64, 8, 48>::decode(&blob).unwrap();
+    let host = HostModel::decode(&blob).unwrap();
     let flight = Model::<'_, FLIGHT_CENTERS, FLIGHT_FEATURES, FLIGHT_NODES>::decode(&blob)
         .expect("a 32 x 4 blob fits the firmware types");
     let names = host.program.inputs.clone();

@@ -33,6 +33,7 @@ pub mod rbf;
 pub mod stream;
 mod tag;
 pub mod testing;
+pub mod vocab;
 
 pub use blob::{BlobError, ColumnRoles, FeatureRange, Meta, Model, ResidualLevel, SensorKind};
 pub use compensator::{Channel, Output, Status};
@@ -40,6 +41,7 @@ pub use parse::{ParseError, ParseErrorKind};
 pub use program::{Op, Program, ProgramBuilder, ProgramError};
 pub use rbf::{Center, Rbf};
 pub use stream::{ProgramState, StepError};
+pub use vocab::EffectKind;
 
 /// Host-side default capacity: centers per model.
 pub const HOST_CENTERS: usize = 64;
@@ -47,6 +49,8 @@ pub const HOST_CENTERS: usize = 64;
 pub const HOST_FEATURES: usize = 8;
 /// Host-side default capacity: operations per feature program.
 pub const HOST_NODES: usize = 48;
+/// A model at the host-side capacities: what the trainer writes and every host tool decodes.
+pub type HostModel<'a> = Model<'a, HOST_CENTERS, HOST_FEATURES, HOST_NODES>;
 /// The reference firmware's capacity (`firmware/src/app.rs` takes these): centers per model.
 pub const FLIGHT_CENTERS: usize = 32;
 /// The reference firmware's capacity: features per model.

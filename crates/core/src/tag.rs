@@ -13,6 +13,9 @@
 //!
 //! A self-describing format (JSON, TOML on the host) names variants instead of numbering them: the
 //! guard passes names through, and an unknown name fails with that format's own error.
+//! [`crate::SensorKind`] goes one step further in those formats: it is written and read by its text
+//! name ([`crate::SensorKind::name`], `"rlg"`, `"mems-gyro"`), the one spelling the command line,
+//! the scenario files and the truth file share; postcard (not human-readable) keeps the tag.
 
 use core::cell::Cell;
 use core::convert::Infallible;
@@ -285,5 +288,44 @@ macro_rules! guarded_enum_serde {
     };
 }
 
-guarded_enum_serde!(crate::blob::SensorKind);
 guarded_enum_serde!(crate::program::Op);
+
+/// The sensor kind: by name in human-readable formats, by the derived tag (guarded) in postcard.
+impl serde::Serialize for crate::blob::SensorKind {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        if serializer.is_human_readable() {
+            serializer.serialize_str(self.name())
+        } else {
+            Self::serialize(self, serializer)
+        }
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for crate::blob::SensorKind {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        if deserializer.is_human_readable() {
+            deserializer.deserialize_str(SensorName)
+        } else {
+            Self::deserialize(TagGuard(deserializer))
+        }
+    }
+}
+
+/// Reads a sensor kind's text name.
+struct SensorName;
+
+impl Visitor<'_> for SensorName {
+    type Value = crate::blob::SensorKind;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "a sensor kind: rlg, qma, ifog, mems-gyro, mems-accel or other"
+        )
+    }
+
+    fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
+        crate::blob::SensorKind::from_name(v)
+            .ok_or_else(|| E::invalid_value(serde::de::Unexpected::Str(v), &self))
+    }
+}

@@ -4,9 +4,7 @@
 use proptest::prelude::*;
 use tcomp_core::blob::{FORMAT_VERSION, MAGIC};
 use tcomp_core::testing::example_model;
-use tcomp_core::{BlobError, Model};
-
-type HostModel<'a> = Model<'a, 64, 8, 48>;
+use tcomp_core::{BlobError, HOST_CENTERS, HOST_FEATURES, HOST_NODES, HostModel, Model};
 
 /// Rewrites the trailing CRC of `blob` so that it matches the content again.
 fn reseal(blob: &mut [u8]) {
@@ -16,7 +14,7 @@ fn reseal(blob: &mut [u8]) {
 }
 
 fn encoded(n_centers: usize, seed: u32) -> Vec<u8> {
-    let m = example_model::<64, 8, 48>(n_centers, seed);
+    let m = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(n_centers, seed);
     let mut buf = vec![0u8; 8192];
     let n = m.encode(&mut buf).unwrap();
     buf.truncate(n);
@@ -56,14 +54,14 @@ fn reasons_are_specific() {
 #[test]
 fn capacity_is_checked_by_the_smaller_firmware_type() {
     let blob = encoded(40, 2);
-    assert!(Model::<'_, 64, 8, 48>::decode(&blob).is_ok());
+    assert!(HostModel::decode(&blob).is_ok());
     assert_eq!(
         Model::<'_, 32, 8, 48>::decode(&blob).unwrap_err(),
         BlobError::CapacityExceeded
     );
     // The wire format does not depend on F: a 4-feature model written by the host build (F = 8)
     // reads into the firmware's F = 4 type with the same numbers, and back.
-    let host = example_model::<64, 8, 48>(32, 3);
+    let host = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(32, 3);
     let mut buf = [0u8; 4096];
     let n = host.encode(&mut buf).unwrap();
     let fw = Model::<'_, 32, 4, 24>::decode(&buf[..n]).unwrap();
@@ -78,7 +76,7 @@ fn capacity_is_checked_by_the_smaller_firmware_type() {
         "re-encoding with F = 4 gives the same bytes"
     );
     // A program with more features than the firmware holds is refused, not truncated.
-    let mut wide = example_model::<64, 8, 48>(4, 3);
+    let mut wide = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(4, 3);
     wide.rbf.offset.0[6] = 1.0;
     let mut buf3 = [0u8; 4096];
     if let Ok(n3) = wide.encode(&mut buf3) {
@@ -88,14 +86,14 @@ fn capacity_is_checked_by_the_smaller_firmware_type() {
 
 #[test]
 fn non_finite_numbers_are_refused_on_encode_and_named() {
-    let mut m = example_model::<64, 8, 48>(8, 4);
+    let mut m = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(8, 4);
     m.rbf.centers[3].w = f32::NAN;
     let mut buf = vec![0u8; 8192];
     assert_eq!(
         m.encode(&mut buf).unwrap_err(),
         BlobError::NonFinite("rbf.centers.w")
     );
-    let mut m = example_model::<64, 8, 48>(8, 4);
+    let mut m = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(8, 4);
     m.rbf.centers[0].g = -1.0;
     assert!(matches!(
         m.encode(&mut buf).unwrap_err(),
@@ -127,7 +125,7 @@ fn every_single_byte_corruption_is_rejected() {
 proptest! {
     #[test]
     fn encode_decode_is_identity(n in 1usize..=64, seed in 1u32..u32::MAX) {
-        let m = example_model::<64, 8, 48>(n, seed);
+        let m = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(n, seed);
         let mut buf = vec![0u8; 8192];
         let len = m.encode(&mut buf).unwrap();
         prop_assert_eq!(HostModel::decode(&buf[..len]).unwrap(), m);
@@ -170,7 +168,7 @@ fn wire_len<T: serde::Serialize>(v: &T) -> usize {
 
 #[test]
 fn unknown_enum_tags_are_malformed_and_named_not_capacity() {
-    let m = example_model::<64, 8, 48>(8, 21);
+    let m = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(8, 21);
     let good = encoded(8, 21);
     // The sensor kind is the first field after magic and version: tag 0 (RLG) of 6 variants.
     assert_eq!(good[5], 0);

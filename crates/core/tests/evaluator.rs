@@ -1,10 +1,10 @@
 //! The f32 RBF evaluator against an f64 reference of the same formula.
 #![allow(clippy::unwrap_used, clippy::needless_range_loop, missing_docs)]
 
-use tcomp_core::Model;
 use tcomp_core::testing::{XorShift, example_model};
+use tcomp_core::{HOST_CENTERS, HOST_FEATURES, HOST_NODES, HostModel};
 
-fn reference(m: &Model<'_, 64, 8, 48>, x: &[f32; 8]) -> f64 {
+fn reference(m: &HostModel<'_>, x: &[f32; 8]) -> f64 {
     let r = &m.rbf;
     let nf = r.n_features as usize;
     let z: Vec<f64> = (0..nf)
@@ -24,7 +24,7 @@ fn reference(m: &Model<'_, 64, 8, 48>, x: &[f32; 8]) -> f64 {
 
 #[test]
 fn matches_f64_reference() {
-    let m = example_model::<64, 8, 48>(64, 7);
+    let m = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(64, 7);
     let mut rng = XorShift(99);
     let mut worst = 0.0f64;
     for _ in 0..5000 {
@@ -42,7 +42,7 @@ fn matches_f64_reference() {
 
 #[test]
 fn linear_term_extrapolates_and_gaussians_fade() {
-    let mut m = example_model::<64, 8, 48>(16, 3);
+    let mut m = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(16, 3);
     let far = [1.0e4f32, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
     let y = m.rbf.eval(&far) as f64;
     let z0 = (far[0] - m.rbf.offset.0[0]) * m.rbf.scale.0[0];
@@ -73,7 +73,7 @@ fn natural_parameters_round_trip() {
 fn expanded_form_stays_accurate_at_the_edges_of_the_range() {
     // Features three half-ranges out on every axis: ‖z‖² ≈ 36 is where the expanded distance loses
     // the most to cancellation. The error must stay far below any sensor's noise (1e-4 of Σ|w|).
-    let m = example_model::<64, 8, 48>(64, 21);
+    let m = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(64, 21);
     let sum_w: f64 = m.rbf.centers.iter().map(|c| c.w.abs() as f64).sum();
     let mut worst = 0.0f64;
     for corner in 0..16u32 {

@@ -49,7 +49,7 @@ proptest! {
         samples in samples(),
         points in fractions(),
     ) {
-        let _ = tcomp_core::Model::<'_, 64, 8, 48>::decode(&body);
+        let _ = tcomp_core::HostModel::decode(&body);
         check_blob(&raw_blob(&body), &samples, &points).map_err(TestCaseError::fail)?;
         let flipped = flipped_blob(n, seed, &flips, reseal);
         let accepted = check_blob(&flipped, &samples, &points).map_err(TestCaseError::fail)?;

@@ -6,12 +6,10 @@
 use tcomp_core::blob::{FORMAT_VERSION, MAGIC, crc32};
 use tcomp_core::program::ProgramError;
 use tcomp_core::testing::example_model;
-use tcomp_core::{BlobError, FeatureRange, Model};
-
-type HostModel<'a> = Model<'a, 64, 8, 48>;
+use tcomp_core::{BlobError, FeatureRange, HOST_CENTERS, HOST_FEATURES, HOST_NODES, HostModel};
 
 fn model() -> HostModel<'static> {
-    example_model::<64, 8, 48>(8, 9)
+    example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(8, 9)
 }
 
 fn encoded(m: &HostModel<'_>) -> Vec<u8> {

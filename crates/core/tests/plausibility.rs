@@ -7,10 +7,10 @@ mod fuzz_support;
 use fuzz_support::{HostModel, seal};
 use tcomp_core::bound::MAX_CORRECTION;
 use tcomp_core::testing::{example_model, example_sample};
-use tcomp_core::{BlobError, Center, Channel, Status};
+use tcomp_core::{BlobError, Center, Channel, HOST_CENTERS, HOST_FEATURES, HOST_NODES, Status};
 
 fn model() -> HostModel<'static> {
-    example_model::<64, 8, 48>(12, 31)
+    example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(12, 31)
 }
 
 /// Refused by `encode` and, written with a valid CRC anyway, by `decode`; returns the reason.
@@ -104,7 +104,7 @@ fn the_correction_limit_is_on_the_bound() {
 #[test]
 fn example_models_pass_and_stay_within_their_bound() {
     for (n, seed) in [(1usize, 1u32), (8, 2), (32, 3), (64, 4)] {
-        let m = example_model::<64, 8, 48>(n, seed);
+        let m = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(n, seed);
         let b = m.bound().unwrap();
         let mut ch = Channel::<48, 8>::new(1.0);
         let mut largest = 0.0f32;

@@ -13,6 +13,7 @@
 //! evidence is marginalised over the grid, so searching more values does not buy evidence.
 
 use serde::Serialize;
+use tcomp_core::parse::is_identifier;
 use tcomp_train::Dataset;
 
 /// Lag time constants searched (s).
@@ -22,40 +23,9 @@ pub const HYST_THRESHOLDS: [f64; 4] = [0.02, 0.05, 0.1, 0.2];
 /// Rate windows searched (s); 60 s is the core's default.
 pub const RATE_WINDOWS_S: [f64; 2] = [60.0, 240.0];
 
-/// The kind of physical effect a candidate stands for (names as in the simulator's effects).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum EffectKind {
-    /// Rate of a temperature.
-    Rate,
-    /// Shupe-type product T·dT/dt.
-    Shupe,
-    /// Difference between thermometers.
-    Gradient,
-    /// Square of a temperature (curvature the model lacks).
-    Square,
-    /// A sensing element lagging its thermometer.
-    LaggedElement,
-    /// Heating/cooling hysteresis state.
-    Hysteresis,
-    /// A non-thermal input column.
-    NonThermal,
-}
-
-impl EffectKind {
-    /// The snake_case name (as the simulator names its effects).
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Rate => "rate",
-            Self::Shupe => "shupe",
-            Self::Gradient => "gradient",
-            Self::Square => "square",
-            Self::LaggedElement => "lagged_element",
-            Self::Hysteresis => "hysteresis",
-            Self::NonThermal => "non_thermal_input",
-        }
-    }
-}
+/// The kind of physical effect a candidate stands for: the core's vocabulary, shared with the
+/// simulator (which hides effects of these kinds).
+pub use tcomp_core::EffectKind;
 
 /// One candidate: the features to add.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -115,14 +85,6 @@ pub fn is_environment(name: &str) -> bool {
 pub fn is_temperature(name: &str) -> bool {
     let l = name.to_ascii_lowercase();
     l.starts_with("t_") || l.contains("temp") || l.ends_with("_c") || l.ends_with("_degc")
-}
-
-/// Whether `name` can be written as an identifier of the core's expression language.
-fn is_identifier(name: &str) -> bool {
-    let mut c = name.chars();
-    c.next()
-        .is_some_and(|f| f.is_ascii_alphabetic() || f == '_')
-        && c.all(|x| x.is_ascii_alphanumeric() || x == '_')
 }
 
 /// Sorts the columns of `data` into temperatures and inputs, leaving out the roles (`exclude`),

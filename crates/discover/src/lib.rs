@@ -4,7 +4,8 @@
 //!
 //! Modules: [`segments`] (where it fails: warm-up, holds, ramps, bands, worst intervals),
 //! [`candidates`] (which effects could be missing, with physical names and ready expressions),
-//! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual),
+//! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual, against
+//! the base model `base` prepares once from the columns and transform of `design`),
 //! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`verdict`] (the stated
 //! criterion). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
 //! in the tool (`host-tools/src/render/`, `host-tools/src/demo/`): this crate analyses, it does not
@@ -20,8 +21,10 @@
 //! ```
 #![forbid(unsafe_code)]
 
+mod base;
 pub mod candidates;
 pub mod confirm;
+mod design;
 pub mod error;
 pub mod score;
 pub mod segments;
@@ -32,14 +35,12 @@ pub use verdict::{Criterion, Verdict};
 
 use serde::Serialize;
 use std::time::Instant;
-use tcomp_core::Model;
-use tcomp_train::features::{F, FeatureSpec, N};
+use tcomp_train::features::FeatureSpec;
 use tcomp_train::metrics::{self, Run};
-use tcomp_train::rbf64::C;
 use tcomp_train::{Dataset, Roles};
 
-/// A decoded model blob as the host reads it.
-pub type HostModel<'a> = Model<'a, C, F, N>;
+/// A decoded model blob as the host reads it (the core's one alias at the host capacities).
+pub use tcomp_core::HostModel;
 
 /// What diagnosis needs to know about a model: its program's source and column roles.
 #[derive(Clone, Debug)]

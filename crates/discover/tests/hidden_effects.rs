@@ -7,13 +7,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use tcomp_demo::{evaluate, fit_features, simulated};
-use tcomp_discover::candidates::EffectKind as Kind;
 use tcomp_discover::{DiagnoseOptions, Verdict, diagnose};
 use tcomp_sim::{EffectKind, SensorKind, presets};
 
 struct Outcome {
     verdict: Verdict,
-    top: Option<(Kind, Vec<String>)>,
+    top: Option<(EffectKind, Vec<String>)>,
     text: String,
     after_over_floor: f64,
 }
@@ -35,7 +34,7 @@ fn case_preset(preset: tcomp_sim::Preset, hidden: Option<EffectKind>) -> Outcome
         .map(|(k, v)| format!("{k} = {v}"))
         .collect();
     let hidden_feats: Vec<String> = hidden
-        .and_then(|h| truth.effects.iter().find(|e| e.name == h.name()))
+        .and_then(|h| truth.effects.iter().find(|e| e.kind() == Some(h)))
         .map(|e| e.features.clone())
         .unwrap_or_default();
     let base: Vec<String> = truth
@@ -107,11 +106,11 @@ fn case_preset(preset: tcomp_sim::Preset, hidden: Option<EffectKind>) -> Outcome
 /// Issue 5's target for the refit with the named effect: within 1.2× the noise floor.
 const AFTER_TARGET: f64 = 1.2;
 
-fn check_found(o: &Outcome, kind: Kind) {
+fn check_found(o: &Outcome, kind: EffectKind) {
     check_found_within(o, kind, AFTER_TARGET);
 }
 
-fn check_found_within(o: &Outcome, kind: Kind, bound: f64) {
+fn check_found_within(o: &Outcome, kind: EffectKind, bound: f64) {
     assert_eq!(o.verdict, Verdict::MissingEffect, "{}", o.text);
     assert_eq!(o.top.as_ref().map(|t| t.0), Some(kind), "{}", o.text);
     assert!(o.after_over_floor <= bound, "{}", o.text);
@@ -122,20 +121,20 @@ use EffectKind::*;
 #[test]
 fn hidden_rate() {
     let o = case(SensorKind::Ifog, &[Poly, Rate], Some(Rate));
-    check_found(&o, Kind::Rate);
+    check_found(&o, EffectKind::Rate);
 }
 
 #[test]
 fn hidden_shupe() {
     let p = tcomp_demo::demo_preset(11).unwrap();
     let o = case_preset(p, Some(Shupe));
-    check_found(&o, Kind::Shupe);
+    check_found(&o, EffectKind::Shupe);
 }
 
 #[test]
 fn hidden_gradient() {
     let o = case(SensorKind::Rlg, &[Poly, Rate, Gradient], Some(Gradient));
-    check_found(&o, Kind::Gradient);
+    check_found(&o, EffectKind::Gradient);
 }
 
 #[test]
@@ -148,7 +147,7 @@ fn hidden_lagged_element() {
     // The scoring (base Gaussians held fixed) ranks τ = 20 min first; the confirmation's refits
     // re-choose τ by their log evidence among 10, 20 and 40 min and find the true 40 min.
     // Measured 1.05× the noise floor after (1.26× with τ = 20 min).
-    check_found(&o, Kind::LaggedElement);
+    check_found(&o, EffectKind::LaggedElement);
     let exprs = o.top.as_ref().map(|t| t.1.clone()).unwrap_or_default();
     assert_eq!(exprs, vec!["lag(t_coil_c, 2400)".to_string()], "{}", o.text);
 }
@@ -160,7 +159,7 @@ fn hidden_hysteresis() {
         &[Poly, Rate, Hysteresis],
         Some(Hysteresis),
     );
-    check_found(&o, Kind::Hysteresis);
+    check_found(&o, EffectKind::Hysteresis);
 }
 
 #[test]
@@ -170,7 +169,7 @@ fn hidden_supply_voltage() {
         &[Poly, Rate, SupplyVoltage],
         Some(SupplyVoltage),
     );
-    check_found(&o, Kind::NonThermal);
+    check_found(&o, EffectKind::NonThermal);
 }
 
 #[test]

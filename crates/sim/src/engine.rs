@@ -13,8 +13,9 @@
 //!    `dt = step_s` (so the truth expressions are exact over the file); the true output integral over
 //!    the row (reference + bias + noise) feeds the pulse counter; the quantised, rounded output is
 //!    written, and `output − reference − bias` is the noise actually drawn.
-
-use std::collections::BTreeMap;
+//!
+//! Parts: [`Physics`] (step 1), the effects' states (step 2's bias), `output` (the counter, the
+//! reference and the statistics of the noise drawn), `record` (the truth of the finished run).
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -22,12 +23,18 @@ use rand_distr::StandardNormal;
 
 use crate::effects::{Context, EffectState, EffectTruth, RowInputs};
 use crate::error::Result;
-use crate::noise::{BinnedStd, GaussMarkov, PulseCounter, Running};
-use crate::ops;
-use crate::scenario::{Scenario, SensorKind};
-use crate::thermal::{FohLag, SelfHeating, quantise};
-use crate::truth::{Columns, NoiseTruth, ProfileTruth, TrueFeatures, Truth};
+use crate::noise::{GaussMarkov, Running};
+use crate::profile::ProfileCursor;
+use crate::scenario::Scenario;
+use crate::sensor::SensorExt;
+use crate::thermal::{FohLag, SelfHeating, ThermometerSpec, quantise};
+use crate::truth::Truth;
 use crate::writer::RowSink;
+
+mod output;
+mod record;
+
+use output::{Drawn, Output};
 
 const TIME_DECIMALS: usize = 4;
 const TEMP_DECIMALS: usize = 4;
@@ -39,6 +46,7 @@ fn round_dec(v: f64, d: usize) -> f64 {
     (v * p).round() / p
 }
 
+/// Running statistics and range of one series.
 struct Extremes {
     run: Running,
     lo: f64,
@@ -73,270 +81,282 @@ pub(crate) fn uses_ident(expr: &str, name: &str) -> bool {
         .any(|tok| tok == name)
 }
 
+/// The run's time grid: internal period `dt`, `k` samples per output row of length `h`.
+#[derive(Clone, Copy)]
+struct Grid {
+    dt: f64,
+    k: u64,
+    h: f64,
+    rows: u64,
+}
+
+/// The sums of one output row's internal samples.
+struct RowSums {
+    time: f64,
+    air: f64,
+    supply: f64,
+    white: f64,
+    gm: f64,
+    therms: Vec<f64>,
+}
+
+/// The averages of one output row, rounded to the decimals written.
+struct RowMeans {
+    time: f64,
+    chamber: f64,
+    supply: f64,
+    white: f64,
+    gm: f64,
+}
+
+impl RowSums {
+    fn new(nt: usize) -> Self {
+        RowSums {
+            time: 0.0,
+            air: 0.0,
+            supply: 0.0,
+            white: 0.0,
+            gm: 0.0,
+            therms: vec![0.0; nt],
+        }
+    }
+
+    fn clear(&mut self) {
+        (self.time, self.air, self.supply, self.white, self.gm) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        self.therms.iter_mut().for_each(|s| *s = 0.0);
+    }
+
+    /// The row's averages over `k` samples; the thermometers' go to `therms`.
+    fn means(&self, k: u64, therms: &mut [f64]) -> RowMeans {
+        let kf = k as f64;
+        for (dst, s) in therms.iter_mut().zip(&self.therms) {
+            *dst = round_dec(s / kf, TEMP_DECIMALS);
+        }
+        RowMeans {
+            time: round_dec(self.time / kf, TIME_DECIMALS),
+            chamber: round_dec(self.air / kf, TEMP_DECIMALS),
+            supply: round_dec(self.supply / kf, VOLT_DECIMALS),
+            white: self.white / kf,
+            gm: self.gm / kf,
+        }
+    }
+}
+
+/// The physics sampled at the internal rate: chamber air, thermometers, supply and output noise.
+struct Physics<'a> {
+    cursor: ProfileCursor,
+    air0: f64,
+    air_prev: f64,
+    specs: &'a [ThermometerSpec],
+    lags: Vec<FohLag>,
+    decays: Vec<f64>,
+    heat: Vec<SelfHeating>,
+    nominal_v: f64,
+    supply_noise_v: f64,
+    wander: GaussMarkov,
+    white_sigma: f64,
+    gm: GaussMarkov,
+    n: u64,
+    dt: f64,
+}
+
+impl<'a> Physics<'a> {
+    /// The state at power-on; draws the initial supply wander and bias instability, in that order.
+    fn new(sc: &'a Scenario, dt: f64, normal: &mut impl FnMut() -> f64) -> Self {
+        let mut cursor = sc.profile.cursor();
+        let air0 = cursor.at(0.0);
+        let th = &sc.thermometers;
+        let sup = sc.supply;
+        let wander = GaussMarkov::new(sup.wander_v, sup.wander_tau_s, dt, sup.wander_v * normal());
+        let noise = sc.noise;
+        let gm = GaussMarkov::new(
+            noise.bias_instability,
+            noise.correlation_s,
+            dt,
+            noise.bias_instability * normal(),
+        );
+        Physics {
+            cursor,
+            air0,
+            air_prev: air0,
+            specs: th,
+            lags: th.iter().map(|t| FohLag::new(t.tau_s, air0)).collect(),
+            decays: th.iter().map(|t| (-dt / t.tau_s).exp()).collect(),
+            heat: th
+                .iter()
+                .map(|t| SelfHeating::new(t.self_heating_c, t.self_heating_tau_s, dt))
+                .collect(),
+            nominal_v: sup.nominal_v,
+            supply_noise_v: sup.noise_v,
+            wander,
+            white_sigma: noise.white_std(dt),
+            gm,
+            n: 0,
+            dt,
+        }
+    }
+
+    /// One internal sample, added to `sums`. The draws per sample, in order: each thermometer's
+    /// noise, the supply wander (not at power-on), the supply noise, the white output noise, the
+    /// bias instability (not at power-on).
+    fn sample(&mut self, sums: &mut RowSums, normal: &mut impl FnMut() -> f64) {
+        let (n, dt) = (self.n, self.dt);
+        let t = n as f64 * dt;
+        let air = if n == 0 { self.air0 } else { self.cursor.at(t) };
+        for i in 0..self.specs.len() {
+            let (Some(lag), Some(sh), Some(spec), Some(decay), Some(acc)) = (
+                self.lags.get_mut(i),
+                self.heat.get_mut(i),
+                self.specs.get(i),
+                self.decays.get(i),
+                sums.therms.get_mut(i),
+            ) else {
+                continue;
+            };
+            let (inside, rise) = if n == 0 {
+                (lag.value(), sh.value())
+            } else {
+                (lag.step(self.air_prev, air, dt, *decay), sh.step())
+            };
+            let reading = quantise(inside + rise + spec.noise_c * normal(), spec.lsb_c);
+            *acc += reading;
+        }
+        let v_w = if n == 0 {
+            self.wander.value()
+        } else {
+            self.wander.step(normal())
+        };
+        sums.supply += self.nominal_v + v_w + self.supply_noise_v * normal();
+        sums.white += self.white_sigma * normal();
+        sums.gm += if n == 0 {
+            self.gm.value()
+        } else {
+            self.gm.step(normal())
+        };
+        sums.time += t;
+        sums.air += air;
+        self.air_prev = air;
+        self.n += 1;
+    }
+}
+
+/// The bias effects' streaming states and the statistics of their contributions.
+struct Effects {
+    states: Vec<Box<dyn EffectState>>,
+    truth: Vec<EffectTruth>,
+    stats: Vec<Extremes>,
+    bias: Extremes,
+}
+
+impl Effects {
+    fn new(sc: &Scenario, ctx: &Context<'_>, h: f64) -> Result<Self> {
+        Ok(Effects {
+            states: sc
+                .effects
+                .iter()
+                .map(|e| e.state(ctx, h))
+                .collect::<Result<_>>()?,
+            truth: sc.effects.iter().map(|e| e.truth(ctx, h)).collect(),
+            stats: sc.effects.iter().map(|_| Extremes::new()).collect(),
+            bias: Extremes::new(),
+        })
+    }
+
+    /// The bias of one row: the sum of the effects' contributions.
+    fn step(&mut self, inputs: &RowInputs<'_>, h: f64) -> f64 {
+        let mut bias = 0.0;
+        for (st, stats) in self.states.iter_mut().zip(self.stats.iter_mut()) {
+            let c = st.step(inputs, h);
+            stats.push(c);
+            bias += c;
+        }
+        self.bias.push(bias);
+        bias
+    }
+
+    /// The effects' truth entries with their contributions' statistics filled in.
+    fn finish(mut self) -> (Vec<EffectTruth>, Extremes) {
+        for (t, s) in self.truth.iter_mut().zip(&self.stats) {
+            t.contribution_std = s.run.std();
+            t.contribution_p2p = s.p2p();
+        }
+        (self.truth, self.bias)
+    }
+}
+
+/// Writes the header: names and decimals of every column.
+fn header<S: RowSink>(sc: &Scenario, sink: &mut S) -> Result<Vec<String>> {
+    let columns = sc.columns();
+    let out_dec = sc.sensor.output_decimals();
+    let mut decimals = vec![TIME_DECIMALS, TEMP_DECIMALS];
+    decimals.extend(std::iter::repeat_n(TEMP_DECIMALS, sc.thermometers.len()));
+    decimals.extend([VOLT_DECIMALS, out_dec, out_dec]);
+    sink.header(&columns, &decimals)?;
+    Ok(columns)
+}
+
+/// Fills `row` in column order.
+fn fill_row(row: &mut [f64], m: &RowMeans, therms: &[f64], out: f64, reference: f64) {
+    let values = [m.time, m.chamber]
+        .into_iter()
+        .chain(therms.iter().copied())
+        .chain([m.supply, out, reference]);
+    for (slot, v) in row.iter_mut().zip(values) {
+        *slot = v;
+    }
+}
+
 /// Runs `sc` into `sink`; returns the truth.
 pub(crate) fn run<S: RowSink>(sc: &Scenario, sink: &mut S) -> Result<Truth> {
     sc.validate()?;
     let mut rng = ChaCha8Rng::seed_from_u64(sc.seed);
     let mut normal = move || -> f64 { rng.sample(StandardNormal) };
-
     let dt = 1.0 / sc.rate_hz;
     let k = sc.samples_per_row();
-    let h = k as f64 * dt;
-    let rows = sc.rows();
-    let nt = sc.thermometers.len();
-    let out_dec = sc.sensor.output_decimals();
-
-    // Effects.
+    let grid = Grid {
+        dt,
+        k,
+        h: k as f64 * dt,
+        rows: sc.rows(),
+    };
     let (names, unit) = sc.context();
     let ctx = Context {
         sensor: sc.sensor,
         therm_names: &names,
         unit,
     };
-    let mut states: Vec<EffectState> = sc
-        .effects
-        .iter()
-        .map(|e| e.state(&ctx, h))
-        .collect::<Result<_>>()?;
-    let mut effect_truth: Vec<EffectTruth> = sc.effects.iter().map(|e| e.truth(&ctx, h)).collect();
-    let mut effect_stats: Vec<Extremes> = sc.effects.iter().map(|_| Extremes::new()).collect();
-    let mut bias_stats = Extremes::new();
-
-    // Physics state.
-    let mut cursor = sc.profile.cursor();
-    let air0 = cursor.at(0.0);
-    let mut lags: Vec<FohLag> = sc
-        .thermometers
-        .iter()
-        .map(|t| FohLag::new(t.tau_s, air0))
-        .collect();
-    let decays: Vec<f64> = sc
-        .thermometers
-        .iter()
-        .map(|t| (-dt / t.tau_s).exp())
-        .collect();
-    let mut heat: Vec<SelfHeating> = sc
-        .thermometers
-        .iter()
-        .map(|t| SelfHeating::new(t.self_heating_c, t.self_heating_tau_s, dt))
-        .collect();
-    let sup = sc.supply;
-    let mut wander = GaussMarkov::new(sup.wander_v, sup.wander_tau_s, dt, sup.wander_v * normal());
-    let noise = sc.noise;
-    let white_sigma = noise.white_std(dt);
-    let mut gm = GaussMarkov::new(
-        noise.bias_instability,
-        noise.correlation_s,
-        dt,
-        noise.bias_instability * normal(),
-    );
-    let phase = {
-        let mut r2 = ChaCha8Rng::seed_from_u64(sc.seed ^ 0x5eed_9a15_e000_0001);
-        r2.random_range(0.0..1.0)
-    };
-    let mut counter = PulseCounter::new(noise.pulse_weight, phase);
-    let reference = round_dec(sc.reference, out_dec);
-
-    // Header.
-    let columns = sc.columns();
-    let mut decimals = vec![TIME_DECIMALS, TEMP_DECIMALS];
-    decimals.extend(std::iter::repeat_n(TEMP_DECIMALS, nt));
-    decimals.extend([VOLT_DECIMALS, out_dec, out_dec]);
-    sink.header(&columns, &decimals)?;
-
-    // Statistics of the drawn noise.
-    let mut st_white = Running::default();
-    let mut st_gm = Running::default();
-    let mut st_quant = Running::default();
-    let mut st_total = Running::default();
-    let mut bin100 = BinnedStd::new(100.0, h);
-    let mut bin1000 = BinnedStd::new(1000.0, h);
-
-    let mut air_prev = air0;
-    let mut therm_sum = vec![0.0; nt];
-    let mut therms = vec![0.0; nt];
+    let mut effects = Effects::new(sc, &ctx, grid.h)?;
+    let mut physics = Physics::new(sc, grid.dt, &mut normal);
+    let mut output = Output::new(sc);
+    let columns = header(sc, sink)?;
+    let mut drawn = Drawn::new(grid.h);
+    let mut sums = RowSums::new(sc.thermometers.len());
+    let mut therms = vec![0.0; sc.thermometers.len()];
     let mut row = vec![0.0; columns.len()];
-    let mut n: u64 = 0;
-    for _ in 0..rows {
-        let (mut t_sum, mut air_sum, mut v_sum, mut w_sum, mut g_sum) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        therm_sum.iter_mut().for_each(|s| *s = 0.0);
-        for _ in 0..k {
-            let t = n as f64 * dt;
-            let air = if n == 0 { air0 } else { cursor.at(t) };
-            for i in 0..nt {
-                let (Some(lag), Some(sh), Some(spec), Some(decay), Some(acc)) = (
-                    lags.get_mut(i),
-                    heat.get_mut(i),
-                    sc.thermometers.get(i),
-                    decays.get(i),
-                    therm_sum.get_mut(i),
-                ) else {
-                    continue;
-                };
-                let (inside, rise) = if n == 0 {
-                    (lag.value(), sh.value())
-                } else {
-                    (lag.step(air_prev, air, dt, *decay), sh.step())
-                };
-                let reading = quantise(inside + rise + spec.noise_c * normal(), spec.lsb_c);
-                *acc += reading;
-            }
-            let v_w = if n == 0 {
-                wander.value()
-            } else {
-                wander.step(normal())
-            };
-            v_sum += sup.nominal_v + v_w + sup.noise_v * normal();
-            w_sum += white_sigma * normal();
-            g_sum += if n == 0 {
-                gm.value()
-            } else {
-                gm.step(normal())
-            };
-            t_sum += t;
-            air_sum += air;
-            air_prev = air;
-            n += 1;
+    for _ in 0..grid.rows {
+        sums.clear();
+        for _ in 0..grid.k {
+            physics.sample(&mut sums, &mut normal);
         }
-        let kf = k as f64;
-        let time = round_dec(t_sum / kf, TIME_DECIMALS);
-        let chamber = round_dec(air_sum / kf, TEMP_DECIMALS);
-        for (dst, s) in therms.iter_mut().zip(&therm_sum) {
-            *dst = round_dec(s / kf, TEMP_DECIMALS);
-        }
-        let supply = round_dec(v_sum / kf, VOLT_DECIMALS);
+        let m = sums.means(grid.k, &mut therms);
         let inputs = RowInputs {
-            time_s: time,
+            time_s: m.time,
             therms: &therms,
-            supply_v: supply,
+            supply_v: m.supply,
         };
-        let mut bias = 0.0;
-        for (st, stats) in states.iter_mut().zip(effect_stats.iter_mut()) {
-            let c = st.step(&inputs, h);
-            stats.push(c);
-            bias += c;
-        }
-        bias_stats.push(bias);
-        let white = w_sum / kf;
-        let gmv = g_sum / kf;
-        let analog = reference + bias + white + gmv;
-        let out = round_dec(counter.step(analog, h), out_dec);
-        let drawn = out - reference - bias;
-        st_white.push(white);
-        st_gm.push(gmv);
-        st_quant.push(out - analog);
-        st_total.push(drawn);
-        bin100.push(time, drawn);
-        bin1000.push(time, drawn);
-
-        let mut w = row.iter_mut();
-        let mut put = |v: f64| {
-            if let Some(slot) = w.next() {
-                *slot = v;
-            }
-        };
-        put(time);
-        put(chamber);
-        for &x in &therms {
-            put(x);
-        }
-        put(supply);
-        put(out);
-        put(reference);
+        let bias = effects.step(&inputs, grid.h);
+        let out = output.step(&m, bias, grid.h, &mut drawn);
+        fill_row(&mut row, &m, &therms, out, output.reference);
         sink.row(&row)?;
     }
     sink.finish()?;
-
-    for (t, s) in effect_truth.iter_mut().zip(&effect_stats) {
-        t.contribution_std = s.run.std();
-        t.contribution_p2p = s.p2p();
-    }
-    let (std_100s, bins_100s) = bin100.finish();
-    let (std_1000s, bins_1000s) = bin1000.finish();
-
-    let mut features: Vec<String> = Vec::new();
-    for f in effect_truth.iter().flat_map(|e| e.features.iter()) {
-        if !features.contains(f) {
-            features.push(f.clone());
-        }
-    }
-    let all_exprs: Vec<&String> = effect_truth
-        .iter()
-        .flat_map(|e| e.expressions.iter().chain(e.features.iter()))
-        .collect();
-    let signals: BTreeMap<String, String> = ctx
-        .signals()
-        .into_iter()
-        .filter(|(name, _)| all_exprs.iter().any(|e| uses_ident(e, name)))
-        .collect();
-
-    let mut customary = BTreeMap::new();
-    match sc.sensor {
-        SensorKind::Qma => {
-            customary.insert("vrw_ug_per_sqrt_hz".into(), noise.white_density);
-            customary.insert("bias_instability_ug".into(), noise.bias_instability);
-            customary.insert("pulse_weight_ug_s".into(), noise.pulse_weight);
-        }
-        _ => {
-            customary.insert("arw_deg_per_sqrt_h".into(), noise.white_density / 60.0);
-            customary.insert("bias_instability_dph".into(), noise.bias_instability);
-            customary.insert("pulse_weight_arcsec".into(), noise.pulse_weight);
-        }
-    }
-    customary.insert("correlation_s".into(), noise.correlation_s);
-
-    let therm_names: Vec<String> = sc.thermometers.iter().map(|t| t.name.clone()).collect();
-    Ok(Truth {
-        scenario: sc.name.clone(),
-        description: sc.description.clone(),
-        sensor: sc.sensor,
-        unit: unit.to_string(),
-        seed: sc.seed,
-        rate_hz: sc.rate_hz,
-        step_s: h,
-        rows,
-        reference_value: reference,
-        columns: Columns {
-            time: "time_s".into(),
-            target: sc.sensor.output_column().into(),
-            reference: sc.sensor.reference_column().into(),
-            thermometers: therm_names,
-            chamber: "t_chamber_c".into(),
-            inputs: vec!["supply_v".into()],
-            all: columns,
-        },
-        profile: ProfileTruth {
-            start_c: sc.profile.start_c,
-            duration_s: sc.profile.duration_s(),
-            segments: sc.profile.resolved(),
-        },
-        thermal: sc.thermometers.clone(),
-        effects: effect_truth,
-        signals: signals.clone(),
-        true_features: TrueFeatures { signals, features },
-        bias_std: bias_stats.run.std(),
-        bias_p2p: bias_stats.p2p(),
-        noise: NoiseTruth {
-            white_std_raw: st_white.std(),
-            std_raw: st_total.std(),
-            std_100s,
-            std_1000s,
-            bins_100s,
-            bins_1000s,
-            mean: st_total.mean(),
-            bias_instability_std: st_gm.std(),
-            quantisation_std: st_quant.std(),
-            expected_white_std_raw: noise.white_std(h),
-            expected_quantisation_std: noise.quantisation_std(h),
-            spec: noise,
-            spec_customary: customary,
-        },
-        operators: ops::definitions().into_iter().collect(),
-        notes: vec![
-            "error = target - reference = sum of effects + noise".into(),
-            "each effect = offset + sum(coefficients[i] * expressions[i]), evaluated over this file's columns with the operators listed, dt = step_s; exact up to float rounding".into(),
-            "effects are driven by the recorded (noisy, quantised, averaged) thermometer columns, not by the internal temperatures".into(),
-            "internal temperatures: first-order lag of chamber air (tau_s) plus self-heating self_heating_c * (1 - exp(-t/self_heating_tau_s)) after power-on at t = 0".into(),
-        ],
-    })
+    Ok(record::truth(
+        sc,
+        &ctx,
+        grid,
+        columns,
+        effects,
+        drawn,
+        output.reference,
+    ))
 }

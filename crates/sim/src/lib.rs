@@ -15,8 +15,9 @@
 //! ```
 //!
 //! Modules: [`profile`] (chamber profiles), [`thermal`] (lags, self-heating), [`effects`] (named
-//! bias effects), [`noise`] (white, Gauss–Markov, pulses, statistics), [`scenario`] (TOML and
-//! validation), [`writer`] (streaming CSV), [`progress`] (reporting long runs), [`truth`] (JSON truth), [`presets`], [`expr`] (a
+//! bias effects, one module each), [`sensor`] (what the simulator adds to the core's sensor kinds),
+//! [`noise`] (white, Gauss–Markov, pulses, statistics), [`scenario`] (the data and its validation),
+//! [`scenario_file`] (TOML), [`writer`] (streaming CSV), [`progress`] (reporting long runs), [`truth`] (JSON truth), [`presets`], [`expr`] (a
 //! reference evaluator for checking expressions), [`ops`] (the core's operators mirrored).
 
 pub mod effects;
@@ -29,6 +30,8 @@ pub mod presets;
 pub mod profile;
 pub mod progress;
 pub mod scenario;
+pub mod scenario_file;
+pub mod sensor;
 pub mod thermal;
 pub mod truth;
 pub mod writer;
@@ -42,6 +45,7 @@ pub use noise::NoiseSpec;
 pub use presets::{Preset, PresetInfo};
 pub use profile::{Profile, RandomProfile, Segment};
 pub use scenario::{Scenario, SensorKind, SupplySpec};
+pub use sensor::SensorExt;
 pub use thermal::ThermometerSpec;
 pub use truth::{Truth, TruthFile};
 pub use writer::{CsvWriter, RowSink, Table};

@@ -8,7 +8,8 @@
 use crate::effects::{Effect, EffectKind};
 use crate::error::{Error, Result};
 use crate::profile::{Profile, RandomProfile, Segment};
-use crate::scenario::{Scenario, SensorKind, parse_toml};
+use crate::scenario::{Scenario, SensorKind};
+use crate::scenario_file::parse_toml;
 
 /// Name and one-line description of a preset.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -213,7 +214,7 @@ fn pair(
     .with_seed(1)
 }
 
-fn defaults(sensor: SensorKind, kinds: &[EffectKind]) -> Vec<Effect> {
+fn defaults(sensor: SensorKind, kinds: &[EffectKind]) -> Result<Vec<Effect>> {
     kinds
         .iter()
         .map(|&k| Effect::default_for(k, sensor))
@@ -238,7 +239,7 @@ pub fn preset(name: &str) -> Result<Preset> {
             SensorKind::Rlg,
             rlg_qma_train_profile(),
             rlg_qma_verify_profile(),
-            defaults(SensorKind::Rlg, &[Poly, Rate, Gradient]),
+            defaults(SensorKind::Rlg, &[Poly, Rate, Gradient])?,
         ),
         "qma" => pair(
             name,
@@ -246,7 +247,7 @@ pub fn preset(name: &str) -> Result<Preset> {
             SensorKind::Qma,
             rlg_qma_train_profile(),
             rlg_qma_verify_profile(),
-            defaults(SensorKind::Qma, &[Poly, Rate]),
+            defaults(SensorKind::Qma, &[Poly, Rate])?,
         ),
         "ifog" => pair(
             name,
@@ -254,7 +255,7 @@ pub fn preset(name: &str) -> Result<Preset> {
             SensorKind::Ifog,
             ifog_train_profile(),
             ifog_verify_profile(),
-            defaults(SensorKind::Ifog, &[Poly, Rate]),
+            defaults(SensorKind::Ifog, &[Poly, Rate])?,
         ),
         "ifog-shupe" => pair(
             name,
@@ -262,7 +263,7 @@ pub fn preset(name: &str) -> Result<Preset> {
             SensorKind::Ifog,
             ifog_train_profile(),
             ifog_verify_profile(),
-            defaults(SensorKind::Ifog, &[Poly, Rate, Shupe]),
+            defaults(SensorKind::Ifog, &[Poly, Rate, Shupe])?,
         ),
         _ => pair(
             name,
@@ -270,7 +271,7 @@ pub fn preset(name: &str) -> Result<Preset> {
             SensorKind::Rlg,
             rlg_qma_train_profile(),
             random_profile(2)?,
-            defaults(SensorKind::Rlg, &[Poly, Rate, Gradient]),
+            defaults(SensorKind::Rlg, &[Poly, Rate, Gradient])?,
         ),
     })
 }
@@ -295,7 +296,7 @@ pub fn with_effects(sensor: SensorKind, kinds: &[EffectKind]) -> Result<Preset> 
         sensor,
         rlg_qma_train_profile(),
         rlg_qma_verify_profile(),
-        defaults(sensor, kinds),
+        defaults(sensor, kinds)?,
     );
     p.train.validate()?;
     Ok(p)

@@ -15,7 +15,7 @@
 //! step_s = 1.0                  # output step (averaging), optional, default 1 s; a multiple of 1/rate_hz
 //!
 //! [sensor]
-//! kind = "ifog"                 # rlg | qma | ifog
+//! kind = "ifog"                 # rlg | qma | ifog (the core's other kinds are not simulated)
 //! reference = 10.6357           # optional: constant true input, output units (default: earth rate
 //!                               # at 45° latitude for gyros, 1 g = 1e6 µg for the QMA)
 //! [sensor.thermal.t_coil_c]     # optional overrides of a thermometer's defaults
@@ -59,113 +59,17 @@
 //! coefficient = 0.01
 //! ```
 
-use std::collections::BTreeMap;
-
 use serde::{Deserialize, Serialize};
+
+pub use tcomp_core::SensorKind;
 
 use crate::effects::{Context, Effect, EffectKind};
 use crate::error::{Error, Result};
 use crate::noise::NoiseSpec;
-use crate::profile::{Profile, RandomProfile, Segment};
+use crate::profile::Profile;
+pub use crate::sensor::EARTH_RATE_DPH;
+use crate::sensor::{SensorExt, check_simulated};
 use crate::thermal::ThermometerSpec;
-
-/// The kind of sensor simulated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SensorKind {
-    /// Ring laser gyro: anode, cathode and shell thermometers; output °/h; pulse output.
-    Rlg,
-    /// Quartz accelerometer: one thermometer; output µg; pulse output.
-    Qma,
-    /// Fiber-optic gyro: one thermometer on the coil; output °/h.
-    Ifog,
-}
-
-/// Earth rate, °/h.
-pub const EARTH_RATE_DPH: f64 = 15.041;
-
-impl SensorKind {
-    /// Lower-case name (`rlg`, `qma`, `ifog`).
-    pub fn name(self) -> &'static str {
-        match self {
-            SensorKind::Rlg => "rlg",
-            SensorKind::Qma => "qma",
-            SensorKind::Ifog => "ifog",
-        }
-    }
-
-    /// The sensor of this name.
-    pub fn from_name(name: &str) -> Option<SensorKind> {
-        [SensorKind::Rlg, SensorKind::Qma, SensorKind::Ifog]
-            .into_iter()
-            .find(|k| k.name() == name)
-    }
-
-    /// Output unit as written in the truth file (`deg/h` or `ug`).
-    pub fn unit(self) -> &'static str {
-        match self {
-            SensorKind::Qma => "ug",
-            _ => "deg/h",
-        }
-    }
-
-    /// Output column (`gyro_dph` or `accel_ug`).
-    pub fn output_column(self) -> &'static str {
-        match self {
-            SensorKind::Qma => "accel_ug",
-            _ => "gyro_dph",
-        }
-    }
-
-    /// Reference column (`ref_dph` or `ref_ug`).
-    pub fn reference_column(self) -> &'static str {
-        match self {
-            SensorKind::Qma => "ref_ug",
-            _ => "ref_dph",
-        }
-    }
-
-    /// Decimals written for the output and reference columns.
-    pub fn output_decimals(self) -> usize {
-        match self {
-            SensorKind::Qma => 3,
-            _ => 6,
-        }
-    }
-
-    /// Default thermometers with realistic time constants and self-heating.
-    pub fn default_thermometers(self) -> Vec<ThermometerSpec> {
-        match self {
-            SensorKind::Rlg => vec![
-                ThermometerSpec::new("t_anode_c", 1100.0, 3.0, 900.0),
-                ThermometerSpec::new("t_cathode_c", 1300.0, 2.0, 1200.0),
-                ThermometerSpec::new("t_shell_c", 800.0, 0.8, 1800.0),
-            ],
-            SensorKind::Qma => vec![ThermometerSpec::new("t_qma_c", 900.0, 0.6, 1200.0)],
-            SensorKind::Ifog => vec![ThermometerSpec::new("t_coil_c", 1200.0, 1.0, 1800.0)],
-        }
-    }
-
-    /// Default output noise: navigation grade.
-    pub fn default_noise(self) -> NoiseSpec {
-        match self {
-            // ARW 0.003 °/√h, BI 0.003 °/h, 0.5″ pulses (after 4× interpolation).
-            SensorKind::Rlg => NoiseSpec::gyro(0.003, 0.003, 600.0, 0.5),
-            // VRW 10 µg/√Hz, BI 5 µg, 50 µg·s pulses.
-            SensorKind::Qma => NoiseSpec::accel(10.0, 5.0, 600.0, 50.0),
-            // ARW 0.005 °/√h, BI 0.01 °/h, closed-loop digital output (no pulse quantisation).
-            SensorKind::Ifog => NoiseSpec::gyro(0.005, 0.01, 600.0, 0.0),
-        }
-    }
-
-    /// Default reference: vertical earth-rate component at 45° latitude for gyros, 1 g for the QMA.
-    pub fn default_reference(self) -> f64 {
-        match self {
-            SensorKind::Qma => 1.0e6,
-            _ => EARTH_RATE_DPH * 45f64.to_radians().sin(),
-        }
-    }
-}
 
 /// The recorded supply voltage `supply_v`: nominal plus a slow Gauss–Markov wander and white noise.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -179,6 +83,23 @@ pub struct SupplySpec {
     pub wander_tau_s: f64,
     /// White noise of the reading, V.
     pub noise_v: f64,
+}
+
+impl SupplySpec {
+    /// Checks every field; the error names the first bad one (`supply.<field>`).
+    pub fn validate(&self) -> Result<()> {
+        if !self.nominal_v.is_finite() {
+            return Err(Error::invalid("supply.nominal_v", "must be finite"));
+        }
+        if !(self.wander_v.is_finite() && self.wander_v >= 0.0) {
+            return Err(Error::invalid("supply.wander_v", "must be >= 0"));
+        }
+        Error::positive("supply.wander_tau_s", self.wander_tau_s)?;
+        if !(self.noise_v.is_finite() && self.noise_v >= 0.0) {
+            return Err(Error::invalid("supply.noise_v", "must be >= 0"));
+        }
+        Ok(())
+    }
 }
 
 impl Default for SupplySpec {
@@ -263,11 +184,13 @@ impl Scenario {
         self
     }
 
-    /// Adds the sensor's default effect of each kind in `kinds` (see [`Effect::default_for`]).
-    pub fn with_default_effects(mut self, kinds: &[EffectKind]) -> Self {
-        self.effects
-            .extend(kinds.iter().map(|&k| Effect::default_for(k, self.sensor)));
-        self
+    /// Adds the sensor's default effect of each kind in `kinds` (see [`Effect::default_for`]); an
+    /// error names a kind the simulator does not simulate.
+    pub fn with_default_effects(mut self, kinds: &[EffectKind]) -> Result<Self> {
+        for &k in kinds {
+            self.effects.push(Effect::default_for(k, self.sensor)?);
+        }
+        Ok(self)
     }
 
     /// Keeps only the effects of the given kinds.
@@ -332,7 +255,30 @@ impl Scenario {
 
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
-        let pos = |v: f64, f: &str| Error::positive(f, v);
+        check_simulated(self.sensor, "sensor.kind")?;
+        self.validate_rate_and_step()?;
+        if !self.reference.is_finite() {
+            return Err(Error::invalid("sensor.reference", "must be finite"));
+        }
+        self.profile.validate("profile")?;
+        self.validate_size()?;
+        self.validate_thermometers()?;
+        self.noise.validate("noise")?;
+        self.supply.validate()?;
+        let (names, unit) = self.context();
+        let ctx = Context {
+            sensor: self.sensor,
+            therm_names: &names,
+            unit,
+        };
+        for (i, e) in self.effects.iter().enumerate() {
+            e.validate(&ctx, &format!("effects[{i}]"))?;
+        }
+        Ok(())
+    }
+
+    /// The internal rate, and the output step as a whole number of its periods.
+    fn validate_rate_and_step(&self) -> Result<()> {
         if !(self.rate_hz.is_finite() && self.rate_hz > 0.0 && self.rate_hz <= MAX_RATE_HZ) {
             return Err(Error::invalid(
                 "rate_hz",
@@ -365,10 +311,12 @@ impl Scenario {
                 ),
             ));
         }
-        if !self.reference.is_finite() {
-            return Err(Error::invalid("sensor.reference", "must be finite"));
-        }
-        self.profile.validate("profile")?;
+        Ok(())
+    }
+
+    /// The run's size: at least one row, at most [`MAX_ROWS`] rows and [`MAX_INTERNAL_SAMPLES`]
+    /// internal samples.
+    fn validate_size(&self) -> Result<()> {
         if self.profile.duration_s() < self.step_s {
             return Err(Error::invalid(
                 "step_s",
@@ -404,6 +352,11 @@ impl Scenario {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// The thermometers: the sensor's own, in order, each with sane parameters.
+    fn validate_thermometers(&self) -> Result<()> {
         let expect: Vec<String> = self
             .sensor
             .default_thermometers()
@@ -425,250 +378,12 @@ impl Scenario {
         for t in &self.thermometers {
             t.validate(&format!("sensor.thermal.{}", t.name))?;
         }
-        self.noise.validate("noise")?;
-        let s = &self.supply;
-        if !s.nominal_v.is_finite() {
-            return Err(Error::invalid("supply.nominal_v", "must be finite"));
-        }
-        if !(s.wander_v.is_finite() && s.wander_v >= 0.0) {
-            return Err(Error::invalid("supply.wander_v", "must be >= 0"));
-        }
-        pos(s.wander_tau_s, "supply.wander_tau_s")?;
-        if !(s.noise_v.is_finite() && s.noise_v >= 0.0) {
-            return Err(Error::invalid("supply.noise_v", "must be >= 0"));
-        }
-        let (names, unit) = self.context();
-        let ctx = Context {
-            sensor: self.sensor,
-            therm_names: &names,
-            unit,
-        };
-        for (i, e) in self.effects.iter().enumerate() {
-            e.validate(&ctx, &format!("effects[{i}]"))?;
-        }
         Ok(())
     }
 
     /// Parses and validates a scenario from TOML (the training run if the file also has a
     /// `verify_profile`). See the module documentation for the format.
     pub fn from_toml_str(text: &str) -> Result<Scenario> {
-        Ok(parse_toml(text)?.0)
+        Ok(crate::scenario_file::parse_toml(text)?.0)
     }
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ScenarioToml {
-    name: Option<String>,
-    description: Option<String>,
-    seed: Option<u64>,
-    rate_hz: Option<f64>,
-    step_s: Option<f64>,
-    sensor: SensorToml,
-    noise: Option<NoiseToml>,
-    supply: Option<SupplySpec>,
-    profile: Option<ProfileToml>,
-    verify_profile: Option<ProfileToml>,
-    #[serde(default)]
-    effects: Vec<toml::Table>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SensorToml {
-    kind: String,
-    reference: Option<f64>,
-    #[serde(default)]
-    thermal: BTreeMap<String, ThermalToml>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ThermalToml {
-    tau_s: Option<f64>,
-    self_heating_c: Option<f64>,
-    self_heating_tau_s: Option<f64>,
-    noise_c: Option<f64>,
-    lsb_c: Option<f64>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct NoiseToml {
-    arw_deg_per_sqrt_h: Option<f64>,
-    vrw_ug_per_sqrt_hz: Option<f64>,
-    white_density: Option<f64>,
-    bias_instability: Option<f64>,
-    correlation_s: Option<f64>,
-    pulse_weight: Option<f64>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ProfileToml {
-    start_c: Option<f64>,
-    segments: Option<Vec<Segment>>,
-    random: Option<RandomProfile>,
-}
-
-impl ProfileToml {
-    fn build(self, at: &str) -> Result<Profile> {
-        match (self.random, self.segments) {
-            (Some(_), Some(_)) => Err(Error::invalid(
-                format!("{at}.random"),
-                "give either segments or random, not both",
-            )),
-            (Some(r), None) => {
-                if self.start_c.is_some() {
-                    return Err(Error::invalid(
-                        format!("{at}.start_c"),
-                        "a random profile takes its start from random.start_c",
-                    ));
-                }
-                Profile::random(&r).map_err(|e| match e {
-                    Error::Invalid { field, message } => Error::Invalid {
-                        field: field.replacen("profile", at, 1),
-                        message,
-                    },
-                    other => other,
-                })
-            }
-            (None, segments) => {
-                let start_c = self.start_c.ok_or_else(|| {
-                    Error::invalid(format!("{at}.start_c"), "missing start temperature")
-                })?;
-                let p = Profile::new(start_c, segments.unwrap_or_default());
-                p.validate(at)?;
-                Ok(p)
-            }
-        }
-    }
-}
-
-/// Parses a scenario file: the training scenario and, if given, the verification profile.
-pub(crate) fn parse_toml(text: &str) -> Result<(Scenario, Option<Profile>)> {
-    let raw: ScenarioToml = toml::from_str(text).map_err(|e| Error::Toml(e.to_string()))?;
-    let sensor = SensorKind::from_name(&raw.sensor.kind).ok_or_else(|| {
-        Error::invalid(
-            "sensor.kind",
-            format!(
-                "unknown sensor \"{}\" (known: rlg, qma, ifog)",
-                raw.sensor.kind
-            ),
-        )
-    })?;
-    let profile = raw
-        .profile
-        .ok_or_else(|| Error::invalid("profile", "missing: the chamber profile is required"))?
-        .build("profile")?;
-    let verify = raw
-        .verify_profile
-        .map(|p| p.build("verify_profile"))
-        .transpose()?;
-    let mut sc = Scenario::new(sensor, profile);
-    if let Some(n) = raw.name {
-        sc.name = n;
-    }
-    if let Some(d) = raw.description {
-        sc.description = d;
-    }
-    if let Some(s) = raw.seed {
-        sc.seed = s;
-    }
-    if let Some(r) = raw.rate_hz {
-        sc.rate_hz = r;
-    }
-    sc.step_s = raw.step_s.unwrap_or(1.0f64.max(1.0 / sc.rate_hz));
-    if let Some(r) = raw.sensor.reference {
-        sc.reference = r;
-    }
-    for (name, t) in raw.sensor.thermal {
-        let known: Vec<String> = sc.thermometers.iter().map(|t| t.name.clone()).collect();
-        let Some(spec) = sc.thermometers.iter_mut().find(|s| s.name == name) else {
-            return Err(Error::invalid(
-                format!("sensor.thermal.{name}"),
-                format!(
-                    "sensor {} has no thermometer \"{name}\" (known: {})",
-                    sensor.name(),
-                    known.join(", ")
-                ),
-            ));
-        };
-        if let Some(v) = t.tau_s {
-            spec.tau_s = v;
-        }
-        if let Some(v) = t.self_heating_c {
-            spec.self_heating_c = v;
-        }
-        if let Some(v) = t.self_heating_tau_s {
-            spec.self_heating_tau_s = v;
-        }
-        if let Some(v) = t.noise_c {
-            spec.noise_c = v;
-        }
-        if let Some(v) = t.lsb_c {
-            spec.lsb_c = v;
-        }
-    }
-    if let Some(n) = raw.noise {
-        let gyro = sensor != SensorKind::Qma;
-        if n.arw_deg_per_sqrt_h.is_some() && !gyro {
-            return Err(Error::invalid(
-                "noise.arw_deg_per_sqrt_h",
-                "angle random walk is for gyros; use vrw_ug_per_sqrt_hz for the QMA",
-            ));
-        }
-        if n.vrw_ug_per_sqrt_hz.is_some() && gyro {
-            return Err(Error::invalid(
-                "noise.vrw_ug_per_sqrt_hz",
-                "velocity random walk is for accelerometers; use arw_deg_per_sqrt_h for gyros",
-            ));
-        }
-        if let Some(v) = n.arw_deg_per_sqrt_h {
-            sc.noise.white_density = 60.0 * v;
-        }
-        if let Some(v) = n.vrw_ug_per_sqrt_hz {
-            sc.noise.white_density = v;
-        }
-        if let Some(v) = n.white_density {
-            sc.noise.white_density = v;
-        }
-        if let Some(v) = n.bias_instability {
-            sc.noise.bias_instability = v;
-        }
-        if let Some(v) = n.correlation_s {
-            sc.noise.correlation_s = v;
-        }
-        if let Some(v) = n.pulse_weight {
-            sc.noise.pulse_weight = v;
-        }
-    }
-    if let Some(s) = raw.supply {
-        sc.supply = s;
-    }
-    for (i, table) in raw.effects.into_iter().enumerate() {
-        let at = format!("effects[{i}]");
-        let name = match table.get("name") {
-            Some(toml::Value::String(s)) => s.clone(),
-            Some(_) => return Err(Error::invalid(format!("{at}.name"), "must be a string")),
-            None => {
-                return Err(Error::invalid(
-                    format!("{at}.name"),
-                    format!("missing (known: {})", EffectKind::known()),
-                ));
-            }
-        };
-        if EffectKind::from_name(&name).is_none() {
-            return Err(Error::invalid(
-                format!("{at}.name"),
-                format!("unknown effect \"{name}\" (known: {})", EffectKind::known()),
-            ));
-        }
-        let effect: Effect = table
-            .try_into()
-            .map_err(|e: toml::de::Error| Error::invalid(at.clone(), e.message().to_string()))?;
-        sc.effects.push(effect);
-    }
-    sc.validate()?;
-    Ok((sc, verify))
 }

@@ -4,8 +4,8 @@
 use std::collections::BTreeMap;
 
 use tcomp_sim::{
-    EffectKind, NoiseSpec, Profile, Scenario, Segment, SensorKind, expr, presets, simulate,
-    simulate_to_writer,
+    EffectKind, NoiseSpec, Profile, Scenario, Segment, SensorKind, effects, expr, presets,
+    simulate, simulate_to_writer,
 };
 
 /// An IFOG scenario with noiseless, unquantised thermometers and the given profile.
@@ -194,7 +194,7 @@ fn same_seed_same_bytes_different_seed_different_bytes() {
 
 #[test]
 fn with_effects_builds_every_subset() {
-    let all: Vec<EffectKind> = EffectKind::ALL.to_vec();
+    let all: Vec<EffectKind> = effects::SIMULATED.to_vec();
     let p = presets::with_effects(SensorKind::Rlg, &all).unwrap();
     assert_eq!(p.train.effects.len(), 8);
     let hidden = p.clone().map(|s| s.without_effect(EffectKind::Shupe));

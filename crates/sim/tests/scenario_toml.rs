@@ -176,3 +176,34 @@ fn shape_errors_are_reported() {
         "{err}"
     );
 }
+
+#[test]
+fn sensor_kinds_the_simulator_does_not_simulate_are_refused_by_name() {
+    // The core knows six sensor kinds; the simulator simulates three and says so.
+    for name in ["mems-gyro", "mems-accel", "other"] {
+        let text = BASE.replace("kind = \"qma\"", &format!("kind = \"{name}\""));
+        let err = Scenario::from_toml_str(&text).unwrap_err().to_string();
+        assert!(
+            err.starts_with("sensor.kind:") && err.contains(name) && err.contains("not simulated"),
+            "{err}"
+        );
+    }
+    let p = Scenario::from_toml_str(BASE).unwrap().profile;
+    let err = Scenario::new(SensorKind::MemsAccel, p)
+        .validate()
+        .unwrap_err();
+    assert!(err.to_string().starts_with("sensor.kind:"), "{err}");
+}
+
+#[test]
+fn the_sensor_kind_reads_and_writes_by_its_text_name() {
+    let sc = Scenario::from_toml_str(BASE).unwrap();
+    let (_, truth) = simulate(&sc).unwrap();
+    let json = serde_json::to_value(&truth).unwrap();
+    assert_eq!(json["sensor"], "qma");
+    let back: tcomp_sim::Truth = serde_json::from_value(json).unwrap();
+    assert_eq!(back.sensor, SensorKind::Qma);
+    for k in SensorKind::ALL {
+        assert_eq!(SensorKind::from_name(k.name()), Some(k));
+    }
+}

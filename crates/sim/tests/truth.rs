@@ -6,7 +6,8 @@ use std::collections::BTreeMap;
 
 use tcomp_sim::profile::SegmentKind;
 use tcomp_sim::{
-    EffectKind, Preset, Scenario, SensorKind, Table, Truth, expr, presets, simulate, write_preset,
+    EffectKind, Preset, Scenario, SensorKind, Table, Truth, effects, expr, presets, simulate,
+    write_preset,
 };
 
 fn std(v: &[f64]) -> f64 {
@@ -64,9 +65,10 @@ fn check_exact(sc: &Scenario) {
 #[test]
 fn every_effect_is_exactly_its_expressions_on_every_sensor() {
     for sensor in [SensorKind::Rlg, SensorKind::Qma, SensorKind::Ifog] {
-        let kinds: Vec<EffectKind> = EffectKind::ALL
-            .into_iter()
-            .filter(|k| k.applies_to(sensor))
+        let kinds: Vec<EffectKind> = effects::SIMULATED
+            .iter()
+            .copied()
+            .filter(|&k| effects::applies_to(k, sensor))
             .collect();
         let p = presets::with_effects(sensor, &kinds).unwrap();
         check_exact(&p.train);
@@ -75,7 +77,7 @@ fn every_effect_is_exactly_its_expressions_on_every_sensor() {
 
 #[test]
 fn each_effect_alone_is_exact_and_named() {
-    for kind in EffectKind::ALL {
+    for &kind in effects::SIMULATED {
         let p = presets::with_effects(SensorKind::Rlg, &[kind]).unwrap();
         let (table, truth) = simulate(&p.verify).unwrap();
         assert_eq!(truth.effects.len(), 1);
@@ -132,6 +134,7 @@ fn presets_are_exact_and_use_the_convention() {
                     assert!(cols.contains(&c.to_string()), "{c}");
                 }
             }
+            other => panic!("preset {} of a sensor not simulated: {other:?}", info.name),
         }
     }
     let shupe = presets::preset("ifog-shupe").unwrap();

@@ -5,11 +5,15 @@
 //! and renamed over the target, so a crash or a full disk never leaves a half-written blob.
 
 use crate::error::TrainError;
-use crate::features::{F, FeatureSpec, N};
+use crate::features::{F, FeatureSpec};
 use crate::rbf64::C;
 use std::io::Write;
 use std::path::Path;
 use tcomp_core::{ColumnRoles, FeatureRange, Meta, Model, Rbf, ResidualLevel, SensorKind};
+
+/// A decoded model at the host capacities (the core's one alias: centers, features and program
+/// nodes are named once, in `tcomp_core::HOST_*`).
+pub use tcomp_core::HostModel;
 
 /// Largest blob the host writes.
 pub const MAX_BLOB: usize = 64 * 1024;
@@ -49,7 +53,7 @@ pub struct OwnedModel {
 
 impl OwnedModel {
     /// The core model, borrowing from `self`.
-    pub fn model(&self) -> Result<Model<'_, C, F, N>, TrainError> {
+    pub fn model(&self) -> Result<HostModel<'_>, TrainError> {
         let program = self.spec.program()?;
         let mut ranges = heapless::Vec::new();
         for r in &self.ranges {
@@ -128,7 +132,7 @@ pub fn read(path: &Path) -> Result<Vec<u8>, TrainError> {
 }
 
 /// Decodes a blob, naming the file and the reason when it is rejected.
-pub fn decode<'a>(path: &Path, bytes: &'a [u8]) -> Result<Model<'a, C, F, N>, TrainError> {
+pub fn decode<'a>(path: &Path, bytes: &'a [u8]) -> Result<HostModel<'a>, TrainError> {
     Model::decode(bytes)
         .map_err(|e| TrainError::Blob(format!("{}: corrupt model blob: {e}", path.display())))
 }

@@ -10,10 +10,10 @@
 
 use crate::dataset::{Dataset, segments};
 use crate::error::TrainError;
-use crate::features::{F, N, bin_mean, bins};
+use crate::features::{N, bin_mean, bins};
 use crate::rbf64::C;
 use serde::Serialize;
-use tcomp_core::{Channel, Model, Status};
+use tcomp_core::{Channel, HostModel, Model, Status};
 
 /// Which columns play which role when evaluating.
 #[derive(Clone, Debug, Default)]
@@ -30,7 +30,7 @@ pub struct Roles {
 
 impl Roles {
     /// The roles stored in a model blob.
-    pub fn of_model(model: &Model<'_, C, F, N>) -> Self {
+    pub fn of_model(model: &HostModel<'_>) -> Self {
         let c = &model.meta.columns;
         Self {
             time: c.time.to_string(),
@@ -80,7 +80,7 @@ pub struct Run {
 /// features past `n_features` are exact zeros, so they add exact zeros — which
 /// `sim_accuracy`'s `narrow_and_wide_runs_agree` checks.
 pub fn run_model(
-    model: &Model<'_, C, F, N>,
+    model: &HostModel<'_>,
     data: &Dataset,
     roles: &Roles,
     temperature: Option<&str>,

@@ -21,10 +21,12 @@
 use proptest::prelude::*;
 use tcomp_core::blob::{FORMAT_VERSION, MAGIC, crc32};
 use tcomp_core::testing::example_model;
-use tcomp_core::{BlobError, Channel, FeatureRange, Model, Status};
+use tcomp_core::{
+    BlobError, Channel, FeatureRange, HOST_CENTERS, HOST_FEATURES, HOST_NODES, Model, Status,
+};
 
-/// The host's model types.
-pub type HostModel<'a> = Model<'a, 64, 8, 48>;
+/// The host's model type.
+pub use tcomp_core::HostModel;
 /// The reference firmware's model types.
 pub type FlightModel<'a> = Model<'a, 32, 4, 16>;
 
@@ -250,7 +252,7 @@ pub fn seal(model: &HostModel<'static>, byte_edits: &[Mutation]) -> Option<Vec<u
 
 /// The blob of a structured case.
 pub fn structured_blob(n_centers: usize, seed: u32, edits: &[Mutation]) -> Option<Vec<u8>> {
-    let mut model = example_model::<64, 8, 48>(n_centers, seed);
+    let mut model = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(n_centers, seed);
     for m in edits {
         match *m {
             Mutation::Set(f, v) => set(&mut model, f, v),
@@ -288,7 +290,7 @@ pub fn raw_blob(body: &[u8]) -> Vec<u8> {
 
 /// A valid blob with bits flipped at `flips` (positions modulo the length), resealed or not.
 pub fn flipped_blob(n_centers: usize, seed: u32, flips: &[(usize, u8)], reseal: bool) -> Vec<u8> {
-    let model = example_model::<64, 8, 48>(n_centers, seed);
+    let model = example_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(n_centers, seed);
     let mut buf = vec![0u8; BUF];
     let n = model.encode(&mut buf).unwrap();
     buf.truncate(n);
@@ -405,7 +407,7 @@ pub fn check_blob(blob: &[u8], samples: &[Sample], points: &[[f32; 16]]) -> Resu
     let mut accepted = false;
     if let Ok(m) = host {
         accepted = true;
-        check_model::<64, 8, 48>(&m, samples, points)?;
+        check_model::<HOST_CENTERS, HOST_FEATURES, HOST_NODES>(&m, samples, points)?;
     }
     if let Ok(m) = flight {
         accepted = true;

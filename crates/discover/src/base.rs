@@ -1,0 +1,357 @@
+//! The base model prepared once for scoring: the model's own features fitted on binned data by the
+//! trainer's evidence search, its design matrix, and its held-out residual (on a verification run
+//! or on contiguous blocks of the training run).
+//!
+//! Why apart from [`crate::score`]: every candidate is scored against this one base (see the
+//! reasons there); preparing it is a job of its own, done once per diagnosis.
+
+use crate::design::{Columns, Transform, compute_binned, error_of, floor_estimate, hcat, mean_sd};
+use crate::error::{DiscoverError, Result};
+use crate::score::ScoreOptions;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+use tcomp_train::bayes::{self, BayesOptions};
+use tcomp_train::dataset::segments;
+use tcomp_train::evidence::{self, GroupFit};
+use tcomp_train::features::{FeatureSpec, bin_mean, bins};
+use tcomp_train::{Dataset, Roles};
+
+/// Held-out data.
+enum HeldOut {
+    /// A verification run: binned error and base design.
+    Verify {
+        data: Box<Dataset>,
+        bins: Vec<(usize, usize)>,
+        starts: Vec<usize>,
+        y: Vec<f64>,
+        phi: DMatrix<f64>,
+    },
+    /// Contiguous blocks of the training bins.
+    Blocks(Vec<Vec<usize>>),
+}
+
+/// The base model prepared for scoring.
+pub struct Prepared {
+    data: Dataset,
+    time: String,
+    signals: Vec<String>,
+    tbins: Vec<(usize, usize)>,
+    starts: Vec<usize>,
+    /// Binned training error, normalised.
+    pub(crate) y: DVector<f64>,
+    ym: f64,
+    ys: f64,
+    pub(crate) phi: DMatrix<f64>,
+    pub(crate) groups: Vec<usize>,
+    pub(crate) n_linear: usize,
+    pub(crate) base: GroupFit,
+    heldout: HeldOut,
+    /// Base figures.
+    pub figures: BaseFigures,
+}
+
+/// Figures of the base model under the scoring machinery.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BaseFigures {
+    /// Training bins.
+    pub train_bins: usize,
+    /// Bin of the fit (s).
+    pub bin_s: f64,
+    /// What the held-out figures are measured on.
+    pub heldout: String,
+    /// Bin of the held-out figures (s).
+    pub heldout_bin_s: f64,
+    /// Log evidence of the base design.
+    pub log_evidence: f64,
+    /// Std of the binned training residual.
+    pub train_residual_std: f64,
+    /// Std of the binned held-out residual.
+    pub heldout_residual_std: f64,
+    /// Noise floor estimated from the held-out residual: std of successive bin differences / √2
+    /// (robust). Slow model errors cancel in the differences; the noise does not.
+    pub noise_floor_estimate: f64,
+    /// Centers of the base design.
+    pub centers: usize,
+}
+
+/// Prepares the base model `spec` (signals and features) with `roles` on `data`, with an optional
+/// verification run.
+pub fn prepare(
+    spec: &FeatureSpec,
+    roles: &Roles,
+    data: &Dataset,
+    verify: Option<&Dataset>,
+    opts: &ScoreOptions,
+) -> Result<Prepared> {
+    let time = data.time(&roles.time)?;
+    let opts = &adapted_bins(opts, time, verify, roles)?;
+    let starts = segments(time, opts.gap_s);
+    let tbins = bins(time, opts.bin_s);
+    let err = error_of(data, roles)?;
+    let yb = bin_mean(&err, &tbins);
+    let n = yb.len();
+    if n < 12 {
+        return Err(DiscoverError::Invalid(format!(
+            "{}: only {n} bins of {} s; diagnosis needs at least 12",
+            data.file(),
+            opts.bin_s
+        )));
+    }
+    let cols = compute_binned(
+        &spec.signals,
+        &spec.features,
+        data,
+        &roles.time,
+        &starts,
+        &tbins,
+    )?;
+    let x: Vec<Vec<f64>> = (0..n)
+        .map(|i| cols.iter().map(|c| c[i]).collect())
+        .collect();
+    let fit = bayes::fit(&x, &yb, &BayesOptions::default()).ok_or_else(|| {
+        DiscoverError::Invalid("the evidence iteration of the base model failed".into())
+    })?;
+    let (mean, sd): (Vec<f64>, Vec<f64>) = cols
+        .iter()
+        .map(|c| {
+            let (m, s) = mean_sd(c);
+            (m, s.max(1e-300))
+        })
+        .unzip();
+    let tr = Transform {
+        mean,
+        sd,
+        rbf: fit.rbf,
+    };
+    let phi = tr.design(&cols, n);
+    let d = cols.len();
+    let groups: Vec<usize> = (0..phi.ncols())
+        .map(|j| match j {
+            0 => 0,
+            j if j <= d => 1,
+            _ => 2,
+        })
+        .collect();
+    let (ym, ys) = mean_sd(&yb);
+    let ys = ys.max(1e-300);
+    let y = DVector::from_iterator(n, yb.iter().map(|v| (v - ym) / ys));
+    let base = evidence::fit(&phi, &y, &groups, None)
+        .ok_or_else(|| DiscoverError::Invalid("the base design is singular".into()))?;
+    let heldout = held_out(spec, roles, verify, opts, &tr, n)?;
+    let mut p = Prepared {
+        data: data.clone(),
+        time: roles.time.clone(),
+        signals: spec.signals.clone(),
+        tbins,
+        starts,
+        y,
+        ym,
+        ys,
+        phi,
+        groups,
+        n_linear: d,
+        base,
+        heldout,
+        figures: BaseFigures::default(),
+    };
+    p.figures = base_figures(&p, opts, tr.rbf.centers.len())?;
+    Ok(p)
+}
+
+/// The options with bins fitted to the data: bursty records get shorter bins than asked (see
+/// `adaptive_bin`); the figures report them.
+fn adapted_bins(
+    opts: &ScoreOptions,
+    time: &[f64],
+    verify: Option<&Dataset>,
+    roles: &Roles,
+) -> Result<ScoreOptions> {
+    let mut adapted = opts.clone();
+    adapted.bin_s = tcomp_train::features::adaptive_bin(time, opts.bin_s, 24);
+    if let Some(v) = verify {
+        adapted.heldout_bin_s =
+            tcomp_train::features::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
+    }
+    Ok(adapted)
+}
+
+/// The held-out data: the verification run binned through the base transform `tr`, or contiguous
+/// blocks of the `n` training bins.
+fn held_out(
+    spec: &FeatureSpec,
+    roles: &Roles,
+    verify: Option<&Dataset>,
+    opts: &ScoreOptions,
+    tr: &Transform,
+    n: usize,
+) -> Result<HeldOut> {
+    Ok(match verify {
+        Some(v) => {
+            let vt = v.time(&roles.time)?;
+            let vstarts = segments(vt, opts.gap_s);
+            let vb = bins(vt, opts.heldout_bin_s);
+            let vy = bin_mean(&error_of(v, roles)?, &vb);
+            let vcols =
+                compute_binned(&spec.signals, &spec.features, v, &roles.time, &vstarts, &vb)?;
+            let phi_v = tr.design(&vcols, vy.len());
+            HeldOut::Verify {
+                data: Box::new(v.clone()),
+                bins: vb,
+                starts: vstarts,
+                y: vy,
+                phi: phi_v,
+            }
+        }
+        None => {
+            let k = opts.folds.clamp(2, n / 4);
+            HeldOut::Blocks(
+                (0..k)
+                    .map(|f| (f * n / k..(f + 1) * n / k).collect())
+                    .collect(),
+            )
+        }
+    })
+}
+
+/// The base model's figures under the scoring machinery.
+fn base_figures(p: &Prepared, opts: &ScoreOptions, centers: usize) -> Result<BaseFigures> {
+    let n = p.y.len();
+    let ys = p.ys;
+    let base_fit = &p.base;
+    let (held, runs) = p
+        .heldout_residuals(&p.phi, None, &p.groups, base_fit)
+        .ok_or_else(|| DiscoverError::Invalid("held-out prediction failed".into()))?;
+    Ok(BaseFigures {
+        train_bins: n,
+        bin_s: opts.bin_s,
+        heldout: match &p.heldout {
+            HeldOut::Verify { data, .. } => format!("verification run {}", data.file()),
+            HeldOut::Blocks(b) => format!(
+                "{} contiguous blocks of the training run, each predicted from the others",
+                b.len()
+            ),
+        },
+        heldout_bin_s: match &p.heldout {
+            HeldOut::Verify { .. } => opts.heldout_bin_s,
+            HeldOut::Blocks(_) => opts.bin_s,
+        },
+        log_evidence: base_fit.log_evidence - n as f64 * ys.ln(),
+        train_residual_std: p.train_std(&p.phi, base_fit),
+        heldout_residual_std: mean_sd(&held).1,
+        noise_floor_estimate: floor_estimate(&runs),
+        centers,
+    })
+}
+
+impl Prepared {
+    /// Std of the binned training residual (target units) of the fit `fit` of design `phi`.
+    pub(crate) fn train_std(&self, phi: &DMatrix<f64>, fit: &GroupFit) -> f64 {
+        let r = &self.y - phi * &fit.w;
+        mean_sd(r.as_slice()).1 * self.ys
+    }
+
+    /// Held-out residuals (in target units) and the runs of bins they form.
+    pub(crate) fn heldout_residuals(
+        &self,
+        phi: &DMatrix<f64>,
+        extra_v: Option<&[Vec<f64>]>,
+        groups: &[usize],
+        fit: &GroupFit,
+    ) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
+        match &self.heldout {
+            HeldOut::Verify { y, phi: pv, .. } => {
+                let pv = match extra_v {
+                    Some(c) => hcat(pv, c),
+                    None => pv.clone(),
+                };
+                let pred = pv * &fit.w;
+                let r: Vec<f64> = y
+                    .iter()
+                    .zip(pred.iter())
+                    .map(|(a, p)| a - (p * self.ys + self.ym))
+                    .collect();
+                Some((r.clone(), vec![r]))
+            }
+            HeldOut::Blocks(blocks) => {
+                let n = phi.nrows();
+                let mut all = Vec::new();
+                let mut runs = Vec::new();
+                for test in blocks {
+                    let keep: Vec<usize> = (0..n).filter(|i| !test.contains(i)).collect();
+                    let w =
+                        evidence::weights_on(phi, &self.y, groups, &fit.alpha, fit.beta, &keep)?;
+                    let run: Vec<f64> = test
+                        .iter()
+                        .map(|&i| {
+                            let p: f64 = phi.row(i).iter().zip(w.iter()).map(|(a, b)| a * b).sum();
+                            (self.y[i] - p) * self.ys
+                        })
+                        .collect();
+                    all.extend_from_slice(&run);
+                    runs.push(run);
+                }
+                Some((all, runs))
+            }
+        }
+    }
+
+    /// Standardised training columns and, with a verification run, its columns.
+    pub(crate) fn standardised(&self, exprs: &[String]) -> Result<(Columns, Option<Columns>)> {
+        let time_col = self.time.clone();
+        let cols = compute_binned(
+            &self.signals,
+            exprs,
+            &self.data,
+            &time_col,
+            &self.starts,
+            &self.tbins,
+        )?;
+        let stats: Vec<(f64, f64)> = cols.iter().map(|c| mean_sd(c)).collect();
+        let z = |cols: Vec<Vec<f64>>| -> Vec<Vec<f64>> {
+            cols.into_iter()
+                .zip(&stats)
+                .map(|(c, (m, s))| c.iter().map(|v| (v - m) / s.max(1e-300)).collect())
+                .collect()
+        };
+        for (e, (_, s)) in exprs.iter().zip(&stats) {
+            if *s <= 1e-12 {
+                return Err(DiscoverError::Invalid(format!(
+                    "`{e}` is constant over the training run"
+                )));
+            }
+        }
+        let v = match &self.heldout {
+            HeldOut::Verify {
+                data, bins, starts, ..
+            } => Some(z(compute_binned(
+                &self.signals,
+                exprs,
+                data,
+                &time_col,
+                starts,
+                bins,
+            )?)),
+            HeldOut::Blocks(_) => None,
+        };
+        Ok((z(cols), v))
+    }
+}
+
+/// Binned values of `expr` on the training data (for plots of residual against a candidate).
+pub fn binned_feature(p: &Prepared, expr: &str) -> Result<Vec<f64>> {
+    let cols = compute_binned(
+        &p.signals,
+        &[expr.to_string()],
+        &p.data,
+        &p.time,
+        &p.starts,
+        &p.tbins,
+    )?;
+    Ok(cols.into_iter().next().unwrap_or_default())
+}
+
+/// Binned training residual of the base design (target units), aligned with [`binned_feature`].
+pub fn base_residual(p: &Prepared) -> Vec<f64> {
+    let r = &p.y - &p.phi * &p.base.w;
+    r.iter().map(|v| v * p.ys).collect()
+}
