@@ -286,4 +286,16 @@ macro_rules! guarded_enum_serde {
 }
 
 guarded_enum_serde!(crate::blob::SensorKind);
-guarded_enum_serde!(crate::program::Op);
+
+// `Op` is generic over its number type; the same two impls, for every `S` serde handles.
+impl<S: serde::Serialize> serde::Serialize for crate::program::Op<S> {
+    fn serialize<Z: serde::Serializer>(&self, serializer: Z) -> Result<Z::Ok, Z::Error> {
+        <crate::program::Op<S>>::serialize(self, serializer)
+    }
+}
+
+impl<'de, S: serde::Deserialize<'de>> serde::Deserialize<'de> for crate::program::Op<S> {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        <crate::program::Op<S>>::deserialize(TagGuard(deserializer))
+    }
+}
