@@ -23,10 +23,9 @@ use rand_distr::StandardNormal;
 use crate::effects::{Context, EffectState, EffectTruth, RowInputs};
 use crate::error::Result;
 use crate::noise::{BinnedStd, GaussMarkov, PulseCounter, Running};
-use crate::ops;
 use crate::scenario::{Scenario, SensorKind};
 use crate::thermal::{FohLag, SelfHeating, quantise};
-use crate::truth::{Columns, NoiseTruth, ProfileTruth, TrueFeatures, Truth};
+use crate::truth::{Columns, NoiseTruth, ProfileTruth, TrueFeatures, Truth, operator_definitions};
 use crate::writer::RowSink;
 
 const TIME_DECIMALS: usize = 4;
@@ -331,7 +330,7 @@ pub(crate) fn run<S: RowSink>(sc: &Scenario, sink: &mut S) -> Result<Truth> {
             spec: noise,
             spec_customary: customary,
         },
-        operators: ops::definitions().into_iter().collect(),
+        operators: operator_definitions(),
         notes: vec![
             "error = target - reference = sum of effects + noise".into(),
             "each effect = offset + sum(coefficients[i] * expressions[i]), evaluated over this file's columns with the operators listed, dt = step_s; exact up to float rounding".into(),

@@ -16,13 +16,14 @@
 //!
 //! Modules: [`profile`] (chamber profiles), [`thermal`] (lags, self-heating), [`effects`] (named
 //! bias effects), [`noise`] (white, Gauss–Markov, pulses, statistics), [`scenario`] (TOML and
-//! validation), [`writer`] (streaming CSV), [`progress`] (reporting long runs), [`truth`] (JSON truth), [`presets`], [`expr`] (a
-//! reference evaluator for checking expressions), [`ops`] (the core's operators mirrored).
+//! validation), [`writer`] (streaming CSV), [`progress`] (reporting long runs), [`truth`] (JSON truth,
+//! and [`truth::evaluate`], which evaluates its expressions over a file with the core's own
+//! compiler and evaluator in f64), [`presets`], [`ops`] (the core's f64 operators under the
+//! effects' names).
 
 pub mod effects;
 mod engine;
 pub mod error;
-pub mod expr;
 pub mod noise;
 pub mod ops;
 pub mod presets;
