@@ -398,6 +398,17 @@ pub fn write_names<W: Write>(w: &mut W) -> fmt::Result {
     Ok(())
 }
 
+/// Writes the names of the stateful functions, `rate/lag/hyst` (for messages).
+pub fn write_stateful_names<W: Write>(w: &mut W) -> fmt::Result {
+    for (i, f) in FUNCTIONS.iter().filter(|f| f.stateful).enumerate() {
+        if i > 0 {
+            w.write_char('/')?;
+        }
+        w.write_str(f.name)?;
+    }
+    Ok(())
+}
+
 /// Writes the call syntax of every function, `sq(x), abs(x), …` (for messages).
 pub fn write_signatures<W: Write>(w: &mut W) -> fmt::Result {
     for (i, f) in FUNCTIONS.iter().enumerate() {

@@ -89,7 +89,11 @@ impl ParseErrorKind {
             Self::TooManyInputs => "too many input columns",
             Self::TooManyFeatures => "too many features",
             Self::TooManySignals => "too many named signals",
-            Self::TooManyStateful => "too many rate/lag/hyst operators",
+            Self::TooManyStateful => {
+                f.write_str("too many ")?;
+                lang::write_stateful_names(f)?;
+                return f.write_str(" operators");
+            }
             Self::DuplicateSignal => "a signal with this name is already defined",
             Self::BadName => "a signal name must be an identifier that is not a function name",
         };

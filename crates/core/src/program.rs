@@ -19,6 +19,10 @@ use serde::{Deserialize, Serialize};
 pub use crate::lang::DEFAULT_RATE_WINDOW_S;
 
 /// One operation of a feature program; operands are indices of earlier nodes.
+///
+/// The variant order is the blob's wire format: a new operation is appended (its row in
+/// [`crate::lang`] says since which format version it exists). Every `match` on `Op` is
+/// exhaustive, so the compiler lists the places a new variant must be handled.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(remote = "Self")] // serde traits in `crate::tag`: an unknown tag is told apart
 pub enum Op<S = f32> {
@@ -119,7 +123,14 @@ impl<S: Real> Op<S> {
             Op::Rate { window_s: p, .. }
             | Op::Lag { tau_s: p, .. }
             | Op::Hyst { threshold: p, .. } => ([p, p], 1),
-            _ => ([S::ZERO; 2], 0),
+            Op::Input(_)
+            | Op::Add(..)
+            | Op::Sub(..)
+            | Op::Mul(..)
+            | Op::Div(..)
+            | Op::Neg(_)
+            | Op::Sq(_)
+            | Op::Abs(_) => ([S::ZERO; 2], 0),
         }
     }
 
@@ -158,7 +169,16 @@ impl<S: Real> Op<S> {
     pub fn slot(&self) -> Option<u8> {
         match *self {
             Op::Rate { slot, .. } | Op::Lag { slot, .. } | Op::Hyst { slot, .. } => Some(slot),
-            _ => None,
+            Op::Input(_)
+            | Op::Const(_)
+            | Op::Add(..)
+            | Op::Sub(..)
+            | Op::Mul(..)
+            | Op::Div(..)
+            | Op::Neg(_)
+            | Op::Sq(_)
+            | Op::Abs(_)
+            | Op::Clamp { .. } => None,
         }
     }
 }

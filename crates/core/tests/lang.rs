@@ -116,6 +116,17 @@ fn messages_list_the_table() {
         "column 1: wrong number of arguments (sq(x), abs(x), mean(a, ...), rate(x[, window_s]), \
          lag(x, tau_s), hyst(x, threshold), clamp(x, lo, hi))"
     );
+    let mut b = ProgramBuilder::<64, 1>::new();
+    let too_many = (0..=tcomp_core::MAX_STATEFUL)
+        .map(|_| "lag(x, 1)")
+        .collect::<Vec<_>>()
+        .join(" + ");
+    let e = b.feature(Box::leak(too_many.into_boxed_str())).unwrap_err();
+    assert!(
+        e.to_string()
+            .ends_with(": too many rate/lag/hyst operators"),
+        "{e}"
+    );
 }
 
 #[test]
