@@ -4,11 +4,17 @@
 //!
 //! Why one table: the parser (names, arity, messages), the program validator (parameter domains,
 //! the version a blob needs), the streaming evaluator's state slots and this documentation all read
-//! it, so they cannot disagree. Adding a function is a row of [`FUNCTIONS`], its [`Code`] and
-//! [`crate::Op`] variant (appended, so older tags keep their numbers), its evaluation in
-//! [`crate::eval`], and a test. A new operation gets `since` = the next blob format version: a blob
-//! that uses it is stamped with that version ([`crate::Program::format_version`]), so an older
-//! reader refuses it as a version it does not read rather than as malformed bytes.
+//! it, so they cannot disagree.
+//!
+//! Adding a function: a row of [`FUNCTIONS`] (name, operands, parameters with domains and
+//! defaults, its [`Code`], state, `since`, definition) and its `Code` variant; the
+//! [`crate::Op`] variant, appended so older tags keep their numbers, with its arms in `Op`'s
+//! exhaustive matches (the compiler lists them); its evaluation — a function in [`crate::eval`]
+//! called from the evaluator's exhaustive match; the documentation table below (a test compares it
+//! with [`write_table`]); and a test. A new operation gets `since` = the next blob format version,
+//! and `blob::FORMAT_VERSION` must follow (a compile-time assertion insists): a blob that uses it
+//! is stamped with that version ([`crate::Program::format_version`]), so an older reader refuses
+//! it as a version it does not read rather than as malformed bytes.
 //!
 //! # Operators and their exact discrete-time definitions
 //! Sample `n` arrives with inputs `x[n]` and the time step `Δt[n]` (seconds) since sample `n−1`.
