@@ -321,30 +321,61 @@ pub fn function_of(code: Code) -> Option<&'static Function> {
     FUNCTIONS.iter().find(|f| f.op == Some(code))
 }
 
+/// The newest `since` in the tables: the blob format version a build must read at least.
+pub const NEWEST_SINCE: u16 = {
+    let mut newest = 1;
+    let mut i = 0;
+    while i < FUNCTIONS.len() {
+        if FUNCTIONS[i].since > newest {
+            newest = FUNCTIONS[i].since;
+        }
+        i += 1;
+    }
+    let mut i = 0;
+    while i < SYNTAX.len() {
+        if SYNTAX[i].since > newest {
+            newest = SYNTAX[i].since;
+        }
+        i += 1;
+    }
+    newest
+};
+
 /// What validation needs of an operation, distilled from the tables at compile time: a decoded
-/// blob is checked against this small array, so the tables' documentation text never reaches the
-/// firmware's flash.
+/// blob is checked against this small array, so the tables' names and documentation never reach
+/// the firmware's flash.
 #[derive(Clone, Copy)]
 struct Rules {
     since: u16,
-    /// The parameters' domains, when the operation is a function's (else: constants, finite).
-    domains: Option<&'static [Param]>,
+    /// Whether the operation is a function's (its parameters then have `domains`; the others'
+    /// only parameter, a constant's value, must be finite).
+    function: bool,
+    domains: [Domain; MAX_PARAMS],
+    params: u8,
 }
 
 const CODES: usize = Code::Hyst as usize + 1;
 
-const RULES: [Rules; CODES] = {
+static RULES: [Rules; CODES] = {
     let mut rules = [Rules {
         since: 0,
-        domains: None,
+        function: false,
+        domains: [Domain::Finite; MAX_PARAMS],
+        params: 0,
     }; CODES];
     let mut i = 0;
     while i < FUNCTIONS.len() {
         if let Some(code) = FUNCTIONS[i].op {
-            rules[code as usize] = Rules {
-                since: FUNCTIONS[i].since,
-                domains: Some(FUNCTIONS[i].params),
-            };
+            let r = &mut rules[code as usize];
+            r.since = FUNCTIONS[i].since;
+            r.function = true;
+            let params = FUNCTIONS[i].params;
+            let mut k = 0;
+            while k < params.len() {
+                r.domains[k] = params[k].domain;
+                k += 1;
+            }
+            r.params = params.len() as u8;
         }
         i += 1;
     }
@@ -369,28 +400,16 @@ const RULES: [Rules; CODES] = {
     rules
 };
 
-/// The newest `since` in the tables: the blob format version a build must read at least.
-pub const NEWEST_SINCE: u16 = {
-    let mut newest = 1;
-    let mut c = 0;
-    while c < CODES {
-        if RULES[c].since > newest {
-            newest = RULES[c].since;
-        }
-        c += 1;
-    }
-    newest
-};
-
 /// The blob format version `code` exists since.
 pub fn since(code: Code) -> u16 {
     RULES.get(code as usize).map_or(u16::MAX, |r| r.since)
 }
 
-/// The parameters of `code` with their domains when it is a function's operation; `None` for the
-/// others (whose only parameter, a constant's value, must be finite).
-pub fn params_of(code: Code) -> Option<&'static [Param]> {
-    RULES.get(code as usize).and_then(|r| r.domains)
+/// The domains of `code`'s parameters when it is a function's operation; `None` for the others
+/// (whose only parameter, a constant's value, must be finite).
+pub fn domains_of(code: Code) -> Option<&'static [Domain]> {
+    let r = RULES.get(code as usize).filter(|r| r.function)?;
+    r.domains.get(..r.params as usize)
 }
 
 /// Writes the names of the functions, `sq, abs, …` (for messages).

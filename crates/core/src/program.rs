@@ -350,12 +350,12 @@ impl<const N: usize, const F: usize, S: Real> Default for Program<'_, N, F, S> {
 /// be finite).
 fn params_in_domain<S: Real>(op: &Op<S>) -> bool {
     let (values, n) = op.params();
-    let Some(params) = lang::params_of(op.code()) else {
+    let Some(domains) = lang::domains_of(op.code()) else {
         return values.iter().take(n).all(|v| v.is_finite());
     };
     let mut prev = S::ZERO;
-    for (v, p) in values.iter().zip(params).take(n) {
-        if !p.domain.admits(*v, prev) {
+    for (v, domain) in values.iter().zip(domains).take(n) {
+        if !domain.admits(*v, prev) {
             return false;
         }
         prev = *v;
