@@ -23,8 +23,25 @@ use serde::{Deserialize, Serialize};
 
 /// The four bytes every blob starts with.
 pub const MAGIC: [u8; 4] = *b"TCMB";
-/// The blob format version this build reads and writes.
+/// The newest blob format version this build reads. A blob is stamped with the oldest version that
+/// can read it: [`OLDEST_FORMAT_VERSION`], or the `since` of the newest operation its program uses
+/// ([`Program::format_version`], from the table of [`crate::lang`]). So adding an operation to the
+/// language raises this number (the assertion below insists) while every blob that does not use
+/// it keeps its bytes, and a reader that predates the operation refuses such a blob as a version it
+/// does not read ([`BlobError::UnsupportedVersion`]), never as a malformed one.
 pub const FORMAT_VERSION: u16 = 1;
+/// The oldest blob format version this build reads: the layout of [`Model`] has not changed since.
+pub const OLDEST_FORMAT_VERSION: u16 = 1;
+
+const _: () = assert!(
+    crate::lang::NEWEST_SINCE <= FORMAT_VERSION && OLDEST_FORMAT_VERSION <= FORMAT_VERSION,
+    "an operation of the language is newer than the blob format this build reads"
+);
+
+/// Whether this build reads blobs of format `version`.
+pub fn reads_version(version: u16) -> bool {
+    (OLDEST_FORMAT_VERSION..=FORMAT_VERSION).contains(&version)
+}
 
 /// The instrument a model compensates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -112,7 +129,7 @@ pub struct Model<
 > {
     /// Always [`MAGIC`].
     pub magic: [u8; 4],
-    /// Always [`FORMAT_VERSION`] for a model of this build.
+    /// The oldest format version that reads this model (see [`FORMAT_VERSION`]).
     pub version: u16,
     /// Metadata.
     #[serde(borrow)]
@@ -137,7 +154,7 @@ pub enum BlobError {
     Truncated,
     /// The first four bytes are not `TCMB`.
     BadMagic,
-    /// A format version this build does not read.
+    /// A format version this build does not read: the blob is too new (or too old) for it.
     UnsupportedVersion(u16),
     /// The CRC-32 does not match the content.
     Checksum,
@@ -249,7 +266,7 @@ fn locate_unknown_tag(body: &[u8]) -> BlobError {
 }
 
 impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
-    /// A model from its parts, with magic and version set.
+    /// A model from its parts, with magic and version set (the version its program needs).
     pub fn new(
         meta: Meta<'a>,
         program: Program<'a, N, F>,
@@ -259,7 +276,7 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
     ) -> Self {
         Self {
             magic: MAGIC,
-            version: FORMAT_VERSION,
+            version: program.format_version().max(OLDEST_FORMAT_VERSION),
             meta,
             program,
             ranges,
@@ -278,10 +295,15 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
         if self.magic != MAGIC {
             return Err(BlobError::BadMagic);
         }
-        if self.version != FORMAT_VERSION {
+        if !reads_version(self.version) {
             return Err(BlobError::UnsupportedVersion(self.version));
         }
         self.program.validate().map_err(BlobError::Program)?;
+        if self.program.format_version() > self.version {
+            return Err(BlobError::Inconsistent(
+                "version: older than an operation of the program",
+            ));
+        }
         self.rbf.validate()?;
         let nf = self.program.n_features();
         if self.rbf.n_features as usize != nf {
@@ -431,7 +453,7 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
             postcard::Error::DeserializeUnexpectedEnd => BlobError::Truncated,
             _ => BlobError::Malformed,
         })?;
-        if version != FORMAT_VERSION {
+        if !reads_version(version) {
             return Err(BlobError::UnsupportedVersion(version));
         }
         Ok(body)

@@ -1,11 +1,17 @@
 //! The compensation core: everything that must behave the same on the host trainer and on the IMU.
 //!
-//! `no_std`, no allocation, no `unsafe`. Four parts, each in its own module:
+//! `no_std`, no allocation (except the optional `alloc` feature's [`expr`]), no `unsafe`. Four
+//! parts, each in its own module:
 //!
 //! * [`program`] — feature programs: a small expression language over named input columns
-//!   (`T = mean(t_anode_c, t_shell_c)`, `rate(T)`, `T * rate(T)`, `lag(T, 2400)`, …) compiled into a
-//!   fixed-capacity list of operations, and [`stream`] runs it sample by sample with bounded state.
-//!   The trainer computes its training features by running exactly this code over the CSV.
+//!   (`T = mean(t_anode_c, t_shell_c)`, `rate(T)`, `T * rate(T)`, `lag(T, 2400)`, …), defined once
+//!   in the operator table of [`lang`], compiled by [`compile`] (errors and lexical rules in
+//!   [`parse`]) into a fixed-capacity list of operations, and [`stream`] runs it sample by sample
+//!   with bounded state, each operation evaluated by its function in [`eval`]. The trainer computes
+//!   its training features by running exactly this code over the CSV; programs, compiler and
+//!   evaluator are generic over the number type ([`Real`]: f32 on the board, f64 for the
+//!   simulator's truths). With the `alloc` feature, [`expr`] builds expressions as syntax trees and
+//!   prints them as text the compiler reads.
 //! * [`rbf`] — the Gaussian RBF evaluator with per-feature normalisation, per-center widths, an optional
 //!   linear term, and the fast exponential of [`fastexp`].
 //! * [`blob`] — the model blob: one serde type, postcard-encoded, with magic, version and CRC-32;
@@ -20,16 +26,25 @@
 //! its models for its channels and the host uses the large defaults.
 #![no_std]
 
+#[cfg(feature = "alloc")]
+extern crate alloc;
+
 pub mod blob;
 pub mod bound;
 pub mod compensator;
+pub mod compile;
+pub mod eval;
+#[cfg(feature = "alloc")]
+pub mod expr;
 pub mod fastexp;
 pub mod frame;
 pub mod image;
+pub mod lang;
 pub mod parse;
 pub mod point;
 pub mod program;
 pub mod rbf;
+mod real;
 pub mod stream;
 mod tag;
 pub mod testing;
@@ -37,9 +52,11 @@ pub mod vocab;
 
 pub use blob::{BlobError, ColumnRoles, FeatureRange, Meta, Model, ResidualLevel, SensorKind};
 pub use compensator::{Channel, Output, Status};
+pub use compile::ProgramBuilder;
 pub use parse::{ParseError, ParseErrorKind};
-pub use program::{Op, Program, ProgramBuilder, ProgramError};
+pub use program::{Op, Program, ProgramError};
 pub use rbf::{Center, Rbf};
+pub use real::Real;
 pub use stream::{ProgramState, StepError};
 pub use vocab::EffectKind;
 

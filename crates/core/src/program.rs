@@ -4,39 +4,32 @@
 //! input column names it reads, and which nodes are the model's features. Named signals are ordinary
 //! nodes that several features share, so `T = mean(a, b, c)` is computed once per sample.
 //!
-//! # Operators and their exact discrete-time definitions
-//! Sample `n` arrives with inputs `x[n]` and the time step `Δt[n]` (seconds) since sample `n−1`.
-//! Stateful operators start from their input's first value; see [`crate::stream`] for the code.
+//! The language itself — functions, arity, parameter domains, the version each operation exists
+//! since, and the exact definitions — is the table of [`crate::lang`]; validation reads it. The
+//! compiler from text is [`crate::compile`], the evaluator [`crate::stream`].
 //!
-//! | expression | definition |
-//! |---|---|
-//! | `name` | the input column `name` at sample n |
-//! | `1.5`, `-2e-3` | constants |
-//! | `a + b`, `a - b`, `a * b`, `a / b`, `-a` | IEEE-754 f32 arithmetic |
-//! | `sq(a)` | `a·a` |
-//! | `abs(a)` | `|a|` |
-//! | `mean(a, b, …)` | `(a + b + …) · (1/k)`, summed left to right |
-//! | `clamp(a, lo, hi)` | `a` limited to `[lo, hi]` (constants) |
-//! | `lag(a, τ)` | first-order lag: `L[n] = L[n−1] + c·(a[n] − L[n−1])`, `c = 1 − e^(−Δt/τ)`, `L[0] = a[0]` (computed in the equivalent difference form, see [`crate::stream`]). These are the exact samples of a continuous lag driven by a zero-order hold, so a unit step gives `1 − e^(−kΔt/τ)` after `k` samples. |
-//! | `rate(a)`, `rate(a, w)` | d/dt in units **per minute**, window `w` seconds (default 60): two cascaded lags with `τ = w/2`, `L1` of `a` and `L2` of `L1`, and `rate = 60·(L1 − L2)·(e^(Δt/τ) − 1)/Δt`. The factor makes it exact on a ramp once the start-up transient (`∝ e^(−t/τ)`) has decayed: a ramp of slope `s`/s gives exactly `60·s`. Delay ≈ `w` seconds; white input noise is low-pass filtered twice. `rate[0] = 0`. |
-//! | `hyst(a, h)` | heating/cooling state: `+1` if `a[n] > h`, `−1` if `a[n] < −h`, else the previous value; `0` before either. Typically `hyst(rate(T), 0.05)`. |
+//! A program is generic over its number type `S` ([`Real`]): `f32` (the default) in blobs and on the
+//! board, `f64` where the host needs the same features without f32 rounding (the simulator).
 
-use crate::parse::{self, ParseError, ParseErrorKind};
-use crate::{MAX_INPUTS, MAX_SIGNALS, MAX_STATEFUL};
+use crate::lang::{self, Code};
+use crate::{MAX_INPUTS, MAX_SIGNALS, MAX_STATEFUL, Real};
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
 
-/// Default window of `rate(x)` in seconds.
-pub const DEFAULT_RATE_WINDOW_S: f32 = 60.0;
+pub use crate::lang::DEFAULT_RATE_WINDOW_S;
 
 /// One operation of a feature program; operands are indices of earlier nodes.
+///
+/// The variant order is the blob's wire format: a new operation is appended (its row in
+/// [`crate::lang`] says since which format version it exists). Every `match` on `Op` is
+/// exhaustive, so the compiler lists the places a new variant must be handled.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(remote = "Self")] // serde traits in `crate::tag`: an unknown tag is told apart
-pub enum Op {
+pub enum Op<S = f32> {
     /// Input column by index into [`Program::inputs`].
     Input(u8),
     /// A constant.
-    Const(f32),
+    Const(S),
     /// `a + b`.
     Add(u8, u8),
     /// `a - b`.
@@ -56,9 +49,9 @@ pub enum Op {
         /// Operand node.
         x: u8,
         /// Lower limit.
-        lo: f32,
+        lo: S,
         /// Upper limit.
-        hi: f32,
+        hi: S,
     },
     /// Rate of change per minute over a window (see the module table).
     Rate {
@@ -67,7 +60,7 @@ pub enum Op {
         /// State slot.
         slot: u8,
         /// Window in seconds.
-        window_s: f32,
+        window_s: S,
     },
     /// First-order lag.
     Lag {
@@ -76,7 +69,7 @@ pub enum Op {
         /// State slot.
         slot: u8,
         /// Time constant in seconds.
-        tau_s: f32,
+        tau_s: S,
     },
     /// Heating/cooling hysteresis state.
     Hyst {
@@ -85,11 +78,11 @@ pub enum Op {
         /// State slot.
         slot: u8,
         /// Threshold (positive).
-        threshold: f32,
+        threshold: S,
     },
 }
 
-impl Op {
+impl<S: Real> Op<S> {
     /// The operand nodes of this operation (up to two).
     pub fn operands(&self) -> (Option<u8>, Option<u8>) {
         match *self {
@@ -102,11 +95,90 @@ impl Op {
         }
     }
 
+    /// The operation without its operands: its row in the language's table ([`crate::lang`]).
+    pub fn code(&self) -> Code {
+        match self {
+            Op::Input(_) => Code::Input,
+            Op::Const(_) => Code::Const,
+            Op::Add(..) => Code::Add,
+            Op::Sub(..) => Code::Sub,
+            Op::Mul(..) => Code::Mul,
+            Op::Div(..) => Code::Div,
+            Op::Neg(_) => Code::Neg,
+            Op::Sq(_) => Code::Sq,
+            Op::Abs(_) => Code::Abs,
+            Op::Clamp { .. } => Code::Clamp,
+            Op::Rate { .. } => Code::Rate,
+            Op::Lag { .. } => Code::Lag,
+            Op::Hyst { .. } => Code::Hyst,
+        }
+    }
+
+    /// The constant parameters, in the order of the function's parameters in [`crate::lang`]
+    /// (a constant's value counts as its one parameter).
+    pub fn params(&self) -> ([S; 2], usize) {
+        match *self {
+            Op::Const(v) => ([v, v], 1),
+            Op::Clamp { lo, hi, .. } => ([lo, hi], 2),
+            Op::Rate { window_s: p, .. }
+            | Op::Lag { tau_s: p, .. }
+            | Op::Hyst { threshold: p, .. } => ([p, p], 1),
+            Op::Input(_)
+            | Op::Add(..)
+            | Op::Sub(..)
+            | Op::Mul(..)
+            | Op::Div(..)
+            | Op::Neg(_)
+            | Op::Sq(_)
+            | Op::Abs(_) => ([S::ZERO; 2], 0),
+        }
+    }
+
+    /// The operation `code` applied to `x` with parameters `p` and state slot `slot` — how a
+    /// function of [`crate::lang::FUNCTIONS`] compiles; `None` for codes that are not a function's
+    /// operation. Missing parameters read as 0 (the compiler passes them all).
+    pub fn function(code: Code, x: u8, slot: u8, p: &[S]) -> Option<Self> {
+        let p0 = p.first().copied().unwrap_or(S::ZERO);
+        let p1 = p.get(1).copied().unwrap_or(p0);
+        Some(match code {
+            Code::Sq => Op::Sq(x),
+            Code::Abs => Op::Abs(x),
+            Code::Clamp => Op::Clamp { x, lo: p0, hi: p1 },
+            Code::Rate => Op::Rate {
+                x,
+                slot,
+                window_s: p0,
+            },
+            Code::Lag => Op::Lag { x, slot, tau_s: p0 },
+            Code::Hyst => Op::Hyst {
+                x,
+                slot,
+                threshold: p0,
+            },
+            Code::Input
+            | Code::Const
+            | Code::Add
+            | Code::Sub
+            | Code::Mul
+            | Code::Div
+            | Code::Neg => return None,
+        })
+    }
+
     /// The state slot of a stateful operation.
     pub fn slot(&self) -> Option<u8> {
         match *self {
             Op::Rate { slot, .. } | Op::Lag { slot, .. } | Op::Hyst { slot, .. } => Some(slot),
-            _ => None,
+            Op::Input(_)
+            | Op::Const(_)
+            | Op::Add(..)
+            | Op::Sub(..)
+            | Op::Mul(..)
+            | Op::Div(..)
+            | Op::Neg(_)
+            | Op::Sq(_)
+            | Op::Abs(_)
+            | Op::Clamp { .. } => None,
         }
     }
 }
@@ -124,7 +196,7 @@ pub struct Signal<'a> {
 
 /// A compiled feature program with at most `N` nodes and `F` features.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Program<'a, const N: usize, const F: usize> {
+pub struct Program<'a, const N: usize, const F: usize, S = f32> {
     /// Input column names, in the order the `inputs` slice of a step must follow.
     #[serde(borrow)]
     pub inputs: Vec<&'a str, MAX_INPUTS>,
@@ -132,7 +204,7 @@ pub struct Program<'a, const N: usize, const F: usize> {
     #[serde(borrow)]
     pub signals: Vec<Signal<'a>, MAX_SIGNALS>,
     /// Operations in evaluation order.
-    pub nodes: Vec<Op, N>,
+    pub nodes: Vec<Op<S>, N>,
     /// The node of each feature.
     pub features: Vec<u8, F>,
     /// The source expression of each feature.
@@ -191,7 +263,7 @@ impl core::fmt::Display for ProgramError {
     }
 }
 
-impl<'a, const N: usize, const F: usize> Program<'a, N, F> {
+impl<'a, const N: usize, const F: usize, S: Real> Program<'a, N, F, S> {
     /// An empty program.
     pub const fn new() -> Self {
         Self {
@@ -222,19 +294,12 @@ impl<'a, const N: usize, const F: usize> Program<'a, N, F> {
             if a.is_some_and(|a| a as usize >= i) || b.is_some_and(|b| b as usize >= i) {
                 return Err(ProgramError::ForwardReference { node });
             }
-            let params_ok = match *op {
-                Op::Input(k) => {
-                    if k as usize >= self.inputs.len() {
-                        return Err(ProgramError::UnknownInput { node });
-                    }
-                    true
-                }
-                Op::Const(v) => v.is_finite(),
-                Op::Clamp { lo, hi, .. } => lo.is_finite() && hi.is_finite() && lo <= hi,
-                Op::Rate { window_s: p, .. } | Op::Lag { tau_s: p, .. } => p.is_finite() && p > 0.0,
-                Op::Hyst { threshold, .. } => threshold.is_finite() && threshold >= 0.0,
-                _ => true,
-            };
+            if let Op::Input(k) = *op
+                && k as usize >= self.inputs.len()
+            {
+                return Err(ProgramError::UnknownInput { node });
+            }
+            let params_ok = params_in_domain(op);
             if !params_ok {
                 return Err(ProgramError::BadParameter { node });
             }
@@ -263,104 +328,37 @@ impl<'a, const N: usize, const F: usize> Program<'a, N, F> {
         }
         Ok(())
     }
+
+    /// The blob format version this program needs: the newest `since` ([`crate::lang`]) of its
+    /// operations, at least 1. A blob is stamped with it, so a reader that predates one of the
+    /// operations refuses the blob by its version instead of meeting an unknown operation.
+    pub fn format_version(&self) -> u16 {
+        self.nodes
+            .iter()
+            .map(|op| lang::since(op.code()))
+            .fold(1, u16::max)
+    }
 }
 
-impl<const N: usize, const F: usize> Default for Program<'_, N, F> {
+impl<const N: usize, const F: usize, S: Real> Default for Program<'_, N, F, S> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-/// Compiles signal definitions and feature expressions into a [`Program`].
-///
-/// ```
-/// use tcomp_core::ProgramBuilder;
-/// let mut b = ProgramBuilder::<32, 4>::new();
-/// b.line("T = mean(t_anode_c, t_cathode_c, t_shell_c)").unwrap();
-/// b.feature("T").unwrap();
-/// b.feature("rate(T)").unwrap();
-/// b.feature("t_anode_c - t_shell_c").unwrap();
-/// let program = b.finish().unwrap();
-/// assert_eq!(program.inputs.as_slice(), &["t_anode_c", "t_cathode_c", "t_shell_c"]);
-/// ```
-#[derive(Debug)]
-pub struct ProgramBuilder<'a, const N: usize, const F: usize> {
-    pub(crate) program: Program<'a, N, F>,
-    pub(crate) next_slot: u8,
-}
-
-impl<'a, const N: usize, const F: usize> Default for ProgramBuilder<'a, N, F> {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl<'a, const N: usize, const F: usize> ProgramBuilder<'a, N, F> {
-    /// A builder for an empty program.
-    pub fn new() -> Self {
-        Self {
-            program: Program::new(),
-            next_slot: 0,
+/// Whether an operation's parameters lie in the domains [`crate::lang`] gives them (a constant must
+/// be finite).
+fn params_in_domain<S: Real>(op: &Op<S>) -> bool {
+    let (values, n) = op.params();
+    let Some(domains) = lang::domains_of(op.code()) else {
+        return values.iter().take(n).all(|v| v.is_finite());
+    };
+    let mut prev = S::ZERO;
+    for (v, domain) in values.iter().zip(domains).take(n) {
+        if !domain.admits(*v, prev) {
+            return false;
         }
+        prev = *v;
     }
-
-    /// Defines a named signal `name = expr`, usable by later signals and features.
-    pub fn signal(&mut self, name: &'a str, expr: &'a str) -> Result<(), ParseError> {
-        let name_err = |kind| ParseError {
-            start: 0,
-            end: name.len() as u16,
-            kind,
-        };
-        if !parse::is_identifier(name) || parse::is_function(name) {
-            return Err(name_err(ParseErrorKind::BadName));
-        }
-        if self.program.signals.iter().any(|s| s.name == name) {
-            return Err(name_err(ParseErrorKind::DuplicateSignal));
-        }
-        if self.program.signals.is_full() {
-            return Err(name_err(ParseErrorKind::TooManySignals));
-        }
-        let node = parse::compile_expr(self, expr)?;
-        let _ = self.program.signals.push(Signal { name, expr, node });
-        Ok(())
-    }
-
-    /// Adds a feature computed by `expr`.
-    pub fn feature(&mut self, expr: &'a str) -> Result<(), ParseError> {
-        if self.program.features.is_full() {
-            return Err(ParseError {
-                start: 0,
-                end: expr.len() as u16,
-                kind: ParseErrorKind::TooManyFeatures,
-            });
-        }
-        let node = parse::compile_expr(self, expr)?;
-        let _ = self.program.features.push(node);
-        let _ = self.program.feature_exprs.push(expr.trim());
-        Ok(())
-    }
-
-    /// One line of a spec: `NAME = expr` defines a signal, anything else is a feature.
-    /// Errors are positioned within `line`.
-    pub fn line(&mut self, line: &'a str) -> Result<(), ParseError> {
-        match parse::split_definition(line) {
-            Some((name, name_at, expr, expr_at)) => self.signal(name, expr).map_err(|e| {
-                let shift = if e.kind == ParseErrorKind::BadName
-                    || e.kind == ParseErrorKind::DuplicateSignal
-                {
-                    name_at
-                } else {
-                    expr_at
-                };
-                e.shifted(shift as u16)
-            }),
-            None => self.feature(line),
-        }
-    }
-
-    /// The finished program.
-    pub fn finish(self) -> Result<Program<'a, N, F>, ProgramError> {
-        self.program.validate()?;
-        Ok(self.program)
-    }
+    true
 }

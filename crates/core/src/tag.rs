@@ -270,26 +270,6 @@ impl<'de> Visitor<'de> for Refuse {
     }
 }
 
-/// Implements `Serialize` and `Deserialize` for an enum derived with `#[serde(remote = "Self")]`:
-/// serialization is the derived one, deserialization the derived one behind a [`TagGuard`].
-macro_rules! guarded_enum_serde {
-    ($ty:ty) => {
-        impl serde::Serialize for $ty {
-            fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-                <$ty>::serialize(self, serializer)
-            }
-        }
-
-        impl<'de> serde::Deserialize<'de> for $ty {
-            fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-                <$ty>::deserialize($crate::tag::TagGuard(deserializer))
-            }
-        }
-    };
-}
-
-guarded_enum_serde!(crate::program::Op);
-
 /// The sensor kind: by name in human-readable formats, by the derived tag (guarded) in postcard.
 impl serde::Serialize for crate::blob::SensorKind {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
@@ -327,5 +307,18 @@ impl Visitor<'_> for SensorName {
     fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
         crate::blob::SensorKind::from_name(v)
             .ok_or_else(|| E::invalid_value(serde::de::Unexpected::Str(v), &self))
+    }
+}
+
+// `Op` is generic over its number type; the same two impls, for every `S` serde handles.
+impl<S: serde::Serialize> serde::Serialize for crate::program::Op<S> {
+    fn serialize<Z: serde::Serializer>(&self, serializer: Z) -> Result<Z::Ok, Z::Error> {
+        <crate::program::Op<S>>::serialize(self, serializer)
+    }
+}
+
+impl<'de, S: serde::Deserialize<'de>> serde::Deserialize<'de> for crate::program::Op<S> {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        <crate::program::Op<S>>::deserialize(TagGuard(deserializer))
     }
 }

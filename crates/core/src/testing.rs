@@ -3,8 +3,9 @@
 //! exercises the same numbers.
 
 use crate::blob::{ColumnRoles, FeatureRange, Meta, Model, ResidualLevel, SensorKind};
+use crate::compile::ProgramBuilder;
 use crate::point::Point;
-use crate::program::{Program, ProgramBuilder};
+use crate::program::Program;
 use crate::rbf::{Center, Rbf};
 use heapless::Vec;
 

@@ -6,9 +6,11 @@
 
 use heapless::Vec as HVec;
 use tcomp_core::program::Signal;
-use tcomp_core::{MAX_STATEFUL, Op, ParseErrorKind as K, Program, ProgramBuilder, ProgramError};
+use tcomp_core::{MAX_STATEFUL, ParseErrorKind as K, Program, ProgramBuilder, ProgramError};
 
 type P = Program<'static, 16, 4>;
+/// The blob's operations (f32).
+type Op = tcomp_core::Op;
 
 /// A program over inputs `a`, `b` with `nodes` and the last node as its one feature.
 fn program(nodes: &[Op]) -> P {

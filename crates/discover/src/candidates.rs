@@ -13,6 +13,7 @@
 //! evidence is marginalised over the grid, so searching more values does not buy evidence.
 
 use serde::Serialize;
+use tcomp_core::expr::{self, Expr};
 use tcomp_core::parse::is_identifier;
 use tcomp_train::Dataset;
 
@@ -131,12 +132,12 @@ fn num(v: f64) -> String {
     s.strip_suffix(".0").map(str::to_string).unwrap_or(s)
 }
 
-fn single(kind: EffectKind, effect: String, expr: String, parameter: Option<f64>) -> Family {
+fn single(kind: EffectKind, effect: String, expr: Expr, parameter: Option<f64>) -> Family {
     Family {
         members: vec![Candidate {
             kind,
             effect,
-            expressions: vec![expr],
+            expressions: vec![expr.to_string()],
             parameter,
         }],
     }
@@ -163,17 +164,14 @@ pub fn generate(src: &Sources, existing: &[String]) -> Vec<Family> {
 /// The effects of one temperature: rate (several windows), Shupe-type product, curvature, lagged
 /// element (several time constants), heating/cooling hysteresis (several thresholds).
 fn temperature_families(t: &str, out: &mut Vec<Family>) {
+    let x = || expr::name(t);
     out.push(Family {
         members: RATE_WINDOWS_S
             .iter()
             .map(|&w| Candidate {
                 kind: EffectKind::Rate,
                 effect: format!("rate of temperature d{t}/dt (window {} s)", num(w)),
-                expressions: vec![if w == 60.0 {
-                    format!("rate({t})")
-                } else {
-                    format!("rate({t}, {})", num(w))
-                }],
+                expressions: vec![expr::rate_window(x(), w).to_string()],
                 parameter: Some(w),
             })
             .collect(),
@@ -181,13 +179,13 @@ fn temperature_families(t: &str, out: &mut Vec<Family>) {
     out.push(single(
         EffectKind::Shupe,
         format!("Shupe-type {t}·d{t}/dt"),
-        format!("{t} * rate({t})"),
+        x() * expr::rate(x()),
         None,
     ));
     out.push(single(
         EffectKind::Square,
         format!("curvature in temperature {t}²"),
-        format!("sq({t})"),
+        expr::sq(x()),
         None,
     ));
     out.push(Family {
@@ -199,7 +197,7 @@ fn temperature_families(t: &str, out: &mut Vec<Family>) {
                     "sensing element lags its thermometer {t}, τ ≈ {} min",
                     num((tau / 60.0).round())
                 ),
-                expressions: vec![format!("lag({t}, {})", num(tau))],
+                expressions: vec![expr::lag(x(), tau).to_string()],
                 parameter: Some(tau),
             })
             .collect(),
@@ -213,11 +211,16 @@ fn temperature_families(t: &str, out: &mut Vec<Family>) {
                     "heating/cooling hysteresis of {t} (switches at ±{} per min)",
                     num(h)
                 ),
-                expressions: vec![format!("hyst(rate({t}), {})", num(h))],
+                expressions: vec![expr::hyst(expr::rate(x()), h).to_string()],
                 parameter: Some(h),
             })
             .collect(),
     });
+}
+
+/// `a - b` of two columns.
+fn difference(a: &str, b: &str) -> Expr {
+    expr::name(a) - expr::name(b)
 }
 
 /// Gradients between thermometers: each pair, and two gradients against a common thermometer.
@@ -227,7 +230,7 @@ fn gradient_families(th: &[String], out: &mut Vec<Family>) {
             out.push(single(
                 EffectKind::Gradient,
                 format!("thermal gradient {a}−{b}"),
-                format!("{a} - {b}"),
+                difference(a, b),
                 None,
             ));
         }
@@ -243,7 +246,10 @@ fn gradient_families(th: &[String], out: &mut Vec<Family>) {
                     members: vec![Candidate {
                         kind: EffectKind::Gradient,
                         effect: format!("thermal gradients {a}−{r} and {b}−{r}"),
-                        expressions: vec![format!("{a} - {r}"), format!("{b} - {r}")],
+                        expressions: vec![
+                            difference(a, r).to_string(),
+                            difference(b, r).to_string(),
+                        ],
                         parameter: None,
                     }],
                 });
@@ -260,7 +266,7 @@ fn input_families(inputs: &[String], out: &mut Vec<Family>) {
         } else {
             format!("non-thermal input {c}")
         };
-        out.push(single(EffectKind::NonThermal, effect, c.clone(), None));
+        out.push(single(EffectKind::NonThermal, effect, expr::name(c), None));
     }
 }
 

@@ -61,7 +61,7 @@ pub fn model_info(model: &HostModel<'_>) -> ModelInfo {
                 .program
                 .signals
                 .iter()
-                .map(|s| format!("{} = {}", s.name, s.expr))
+                .map(|s| tcomp_core::expr::define(s.name, &tcomp_core::expr::Expr::text(s.expr)))
                 .collect(),
             features: model
                 .program

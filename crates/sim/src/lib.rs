@@ -17,15 +17,14 @@
 //! Modules: [`profile`] (chamber profiles), [`thermal`] (lags, self-heating), [`effects`] (named
 //! bias effects, one module each), [`sensor`] (what the simulator adds to the core's sensor kinds),
 //! [`noise`] (white, Gauss–Markov, pulses, statistics), [`scenario`] (the data and its validation),
-//! [`scenario_file`] (TOML), [`writer`] (streaming CSV), [`progress`] (reporting long runs), [`truth`] (JSON truth), [`presets`], [`expr`] (a
-//! reference evaluator for checking expressions), [`ops`] (the core's operators mirrored).
+//! [`scenario_file`] (TOML), [`writer`] (streaming CSV), [`progress`] (reporting long runs),
+//! [`truth`] (JSON truth, and [`truth::evaluate`], which evaluates its expressions over a file with
+//! the core's own compiler and evaluator in f64), [`presets`].
 
 pub mod effects;
 mod engine;
 pub mod error;
-pub mod expr;
 pub mod noise;
-pub mod ops;
 pub mod presets;
 pub mod profile;
 pub mod progress;

@@ -2,11 +2,18 @@
 //!
 //! Why: downstream tools (fit, diagnose, demo, tests) need to know which effects are in a file, in
 //! the core's expression language, and how low a residual can possibly go. Serialised as JSON
-//! beside the CSV.
+//! beside the CSV. [`evaluate`] computes an expression of the truth over a file's columns with the
+//! core's own compiler and streaming evaluator, in f64: the check that the truth is exact uses the
+//! very code that trains and flies, not a second implementation of the language.
 
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
+use tcomp_core::lang::{FUNCTIONS, SYNTAX};
+use tcomp_core::{ProgramBuilder, ProgramState};
+
+use crate::error::{Error, Result};
+use crate::writer::Table;
 
 use crate::effects::EffectTruth;
 use crate::noise::NoiseSpec;
@@ -155,4 +162,77 @@ pub struct TruthFile {
     pub train: Truth,
     /// The verification run.
     pub verify: Truth,
+}
+
+/// Operations a truth expression may compile to (the host's capacity, above the firmware's).
+const NODES: usize = 128;
+
+fn expr_error(expr: &str, message: impl std::fmt::Display) -> Error {
+    Error::Expr {
+        expr: expr.to_string(),
+        message: message.to_string(),
+    }
+}
+
+/// Evaluates `expr` over every row of `table` with sample period `dt_s`, compiled and stepped by
+/// the core in f64; `signals` maps names to their defining expressions (which may use earlier
+/// signals in name order). Every name must be a signal or a column of `table`.
+pub fn evaluate(
+    table: &Table,
+    signals: &BTreeMap<String, String>,
+    expr: &str,
+    dt_s: f64,
+) -> Result<Vec<f64>> {
+    let mut b = ProgramBuilder::<NODES, 1, f64>::new();
+    for (name, text) in signals {
+        b.signal(name, text)
+            .map_err(|e| expr_error(&format!("{name} = {text}"), e))?;
+    }
+    b.feature(expr).map_err(|e| expr_error(expr, e))?;
+    let program = b.finish().map_err(|e| expr_error(expr, e))?;
+    let columns = program
+        .inputs
+        .iter()
+        .map(|name| {
+            table.column(name).ok_or_else(|| {
+                expr_error(
+                    expr,
+                    format!(
+                        "unknown column or signal \"{name}\" (columns: {})",
+                        table.names.join(", ")
+                    ),
+                )
+            })
+        })
+        .collect::<Result<Vec<&[f64]>>>()?;
+    let node = program.features.first().copied().unwrap_or(0) as usize;
+    let rows = table.rows();
+    let mut state = ProgramState::<NODES, f64>::new();
+    let mut inputs = vec![0.0; columns.len()];
+    let mut out = Vec::with_capacity(rows);
+    for r in 0..rows {
+        for (slot, col) in inputs.iter_mut().zip(&columns) {
+            *slot = col.get(r).copied().unwrap_or(f64::NAN);
+        }
+        state
+            .step(&program, &inputs, dt_s)
+            .map_err(|e| expr_error(expr, format!("row {r}: {e}")))?;
+        out.push(state.value(node));
+    }
+    Ok(out)
+}
+
+/// The language's operators and their exact definitions, from the core's table, for the truth
+/// file (`operators`).
+pub fn operator_definitions() -> BTreeMap<String, String> {
+    let syntax = SYNTAX
+        .iter()
+        .map(|s| (s.syntax.replace('`', ""), s.definition.to_string()));
+    let functions = FUNCTIONS.iter().map(|f| {
+        let mut call = String::new();
+        // Writing into a String cannot fail.
+        let _ = f.write_syntax(&mut call);
+        (call, f.definition.to_string())
+    });
+    syntax.chain(functions).collect()
 }

@@ -4,8 +4,8 @@
 use std::collections::BTreeMap;
 
 use tcomp_sim::{
-    EffectKind, NoiseSpec, Profile, Scenario, Segment, SensorKind, effects, expr, presets,
-    simulate, simulate_to_writer,
+    EffectKind, NoiseSpec, Profile, Scenario, Segment, SensorKind, effects, presets, simulate,
+    simulate_to_writer, truth,
 };
 
 /// An IFOG scenario with noiseless, unquantised thermometers and the given profile.
@@ -76,7 +76,8 @@ fn chamber_ramp_has_its_rate() {
     let p = presets::rlg_qma_train_profile();
     let sc = Scenario::new(SensorKind::Qma, p);
     let (table, truth) = simulate(&sc).unwrap();
-    let rate = expr::evaluate(&table, &BTreeMap::new(), "rate(t_chamber_c)", truth.step_s).unwrap();
+    let rate =
+        truth::evaluate(&table, &BTreeMap::new(), "rate(t_chamber_c)", truth.step_s).unwrap();
     // Heating ramp 5400..6000 s at +3 °C/min; after 5 windows the estimate is exact.
     assert!((rate[5990] - 3.0).abs() < 0.01, "{}", rate[5990]);
     // Cooling ramp from 13200 s at −3 °C/min.

@@ -6,8 +6,8 @@ use std::collections::BTreeMap;
 
 use tcomp_sim::profile::SegmentKind;
 use tcomp_sim::{
-    EffectKind, Preset, Scenario, SensorKind, Table, Truth, effects, expr, presets, simulate,
-    write_preset,
+    EffectKind, Preset, Scenario, SensorKind, Table, Truth, effects, presets, simulate,
+    truth as truth_file, write_preset,
 };
 
 fn std(v: &[f64]) -> f64 {
@@ -23,7 +23,7 @@ fn residual(table: &Table, truth: &Truth) -> Vec<f64> {
     for e in &truth.effects {
         assert_eq!(e.expressions.len(), e.coefficients.len());
         for (x, c) in e.expressions.iter().zip(&e.coefficients) {
-            let v = expr::evaluate(table, &truth.signals, x, truth.step_s)
+            let v = truth_file::evaluate(table, &truth.signals, x, truth.step_s)
                 .unwrap_or_else(|err| panic!("{}: {err}", e.name));
             for (ri, vi) in r.iter_mut().zip(&v) {
                 *ri -= c * vi;
@@ -56,7 +56,7 @@ fn check_exact(sc: &Scenario) {
     );
     // true_features parse and use only the file's columns (and declared signals).
     for f in &truth.true_features.features {
-        expr::evaluate(&table, &truth.true_features.signals, f, truth.step_s)
+        truth_file::evaluate(&table, &truth.true_features.signals, f, truth.step_s)
             .unwrap_or_else(|e| panic!("{}: {e}", sc.name));
     }
     assert!(!truth.true_features.features.is_empty());
@@ -279,7 +279,7 @@ fn expressions_with_unknown_columns_are_rejected() {
     let mut sc = p.train.clone();
     sc.profile = tcomp_sim::Profile::new(20.0, vec![tcomp_sim::Segment::hold_h(0.1)]);
     let (table, _) = simulate(&sc).unwrap();
-    let err = expr::evaluate(&table, &BTreeMap::new(), "rate(t_anode_c)", 1.0).unwrap_err();
+    let err = truth_file::evaluate(&table, &BTreeMap::new(), "rate(t_anode_c)", 1.0).unwrap_err();
     assert!(err.to_string().contains("t_anode_c"), "{err}");
-    assert!(expr::evaluate(&table, &BTreeMap::new(), "lag(t_coil_c, 60", 1.0).is_err());
+    assert!(truth_file::evaluate(&table, &BTreeMap::new(), "lag(t_coil_c, 60", 1.0).is_err());
 }

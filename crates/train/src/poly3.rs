@@ -14,19 +14,22 @@ use crate::error::TrainError;
 use crate::features::{self, FeatureSpec, bin_mean};
 use crate::rbf64::{Rbf64, design, least_squares, mean_std, normalise_rows, split_weights};
 use tcomp_core::FeatureRange;
+use tcomp_core::expr::{self, Expr};
 
 /// Name of the clamped-temperature signal poly3 defines.
 pub const SIGNAL: &str = "Tclamped";
 
-/// The signal line and feature expressions of a cubic in `expr` clamped to `[lo, hi]`.
-pub fn program_lines(expr: &str, lo: f64, hi: f64) -> (String, Vec<String>) {
+/// The signal line and feature expressions of a cubic in `feature` (an expression's text) clamped
+/// to `[lo, hi]` (written in scientific notation, as the blobs of earlier builds have them).
+pub fn program_lines(feature: &str, lo: f64, hi: f64) -> (String, Vec<String>) {
+    let clamped = expr::clamp(Expr::text(feature), Expr::sci(lo), Expr::sci(hi));
+    let t = expr::name(SIGNAL);
     (
-        format!("{SIGNAL} = clamp({expr}, {lo:e}, {hi:e})"),
-        vec![
-            SIGNAL.to_string(),
-            format!("sq({SIGNAL})"),
-            format!("{SIGNAL} * sq({SIGNAL})"),
-        ],
+        expr::define(SIGNAL, &clamped),
+        [t.clone(), expr::sq(t.clone()), t.clone() * expr::sq(t)]
+            .iter()
+            .map(Expr::to_string)
+            .collect(),
     )
 }
 
@@ -113,4 +116,19 @@ pub(crate) fn cubic_basis(
         ranges: out,
         rows,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn program_lines_spell_the_cubic_as_before() {
+        let (signal, features) = program_lines("mean(t_a, t_b)", -10.0, 21.5);
+        assert_eq!(signal, "Tclamped = clamp(mean(t_a, t_b), -1e1, 2.15e1)");
+        assert_eq!(
+            features,
+            ["Tclamped", "sq(Tclamped)", "Tclamped * sq(Tclamped)"]
+        );
+    }
 }

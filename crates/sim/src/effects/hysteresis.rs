@@ -8,7 +8,7 @@ use super::text::{check_finite, check_pos, num, rate_expr};
 use super::{Context, EffectModel, EffectState, EffectTruth, Terms};
 use super::{default_input, default_window, per_sensor};
 use crate::error::Result;
-use crate::ops::{Hyst, RATE_WINDOW_S, Rate};
+use super::{HystFilter as Hyst, RATE_WINDOW_S, RateFilter as Rate};
 
 fn default_threshold() -> f64 {
     0.05

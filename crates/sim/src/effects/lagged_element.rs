@@ -8,7 +8,7 @@ use super::text::{check_finite, check_pos, num};
 use super::{Context, EffectModel, EffectState, EffectTruth, Terms};
 use super::{default_input, default_t0, per_sensor};
 use crate::error::Result;
-use crate::ops::Lag;
+use super::LagFilter as Lag;
 
 /// `c·(lag(T, tau) − t0)`: a sensing element lagging its thermometer.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -3,7 +3,7 @@
 //!
 //! Why: tests and demos need a bias whose parts are known by name, so that a diagnosis can be checked
 //! against "the effect that is really there". Each effect is evaluated from the *recorded* columns of
-//! the output file, sample by sample with the core's streaming operators ([`crate::ops`]), so the
+//! the output file, sample by sample with the core's own streaming filters in f64 (the aliases below), so the
 //! expressions written to the truth file reproduce the bias exactly (to float rounding): a perfect
 //! model is limited only by the noise.
 //!
@@ -21,7 +21,15 @@ use tcomp_core::SensorKind;
 pub(crate) use context::{Context, RowInputs};
 
 use crate::error::{Error, Result};
-use crate::ops::RATE_WINDOW_S;
+
+/// The rate window an effect uses when its file gives none: the feature language's default.
+pub(crate) const RATE_WINDOW_S: f64 = tcomp_core::lang::DEFAULT_RATE_WINDOW_S as f64;
+/// The core's first-order lag in f64: the same code the board runs in f32.
+pub(crate) type LagFilter = tcomp_core::eval::Lag<f64>;
+/// The core's windowed rate in f64.
+pub(crate) type RateFilter = tcomp_core::eval::Rate<f64>;
+/// The core's hysteresis relay in f64.
+pub(crate) type HystFilter = tcomp_core::eval::Hyst<f64>;
 
 /// What one effect does; each effect module implements it for its parameter struct.
 pub(crate) trait EffectModel: Sized {
@@ -314,5 +322,31 @@ mod tests {
         }
         assert!(!is_simulated(EffectKind::Square));
         assert!(Effect::default_for(EffectKind::NonThermal, SensorKind::Ifog).is_err());
+    }
+}
+
+#[cfg(test)]
+mod filter_tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::{HystFilter as Hyst, RateFilter as Rate};
+
+    #[test]
+    fn rate_of_a_ramp_is_exact_after_transient() {
+        let mut r = Rate::new(60.0);
+        let mut last = 0.0;
+        for n in 0..2000 {
+            last = r.step(20.0 + 0.05 * n as f64, 1.0); // 3 °C/min
+        }
+        assert!((last - 3.0).abs() < 1e-9, "{last}");
+    }
+
+    #[test]
+    fn hysteresis_holds_state() {
+        let mut h = Hyst::new(0.5);
+        let out: Vec<f64> = [0.0, 0.6, 0.1, -0.4, -0.6, 0.2]
+            .iter()
+            .map(|&x| h.step(x))
+            .collect();
+        assert_eq!(out, vec![0.0, 1.0, 1.0, 1.0, -1.0, -1.0]);
     }
 }

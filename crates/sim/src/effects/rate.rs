@@ -8,7 +8,7 @@ use super::text::{check_finite, check_pos, rate_expr};
 use super::{Context, EffectModel, EffectState, EffectTruth, Terms};
 use super::{default_input, default_window, per_sensor};
 use crate::error::Result;
-use crate::ops::{RATE_WINDOW_S, Rate as RateOp};
+use super::{RATE_WINDOW_S, RateFilter as RateOp};
 
 /// `c·rate(T, window)` with the rate in °C/min.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -3,8 +3,8 @@
 //! The effects' truth expressions are text in the core's feature language; these helpers are the
 //! only places that print numbers and operators into it.
 
+use super::RATE_WINDOW_S;
 use crate::error::{Error, Result};
-use crate::ops::RATE_WINDOW_S;
 
 /// A number as the expressions print it.
 pub(crate) fn num(x: f64) -> String {

@@ -8,7 +8,7 @@ use super::context::RowInputs;
 use super::text::{check_finite, check_pos, num};
 use super::{Context, EffectModel, EffectState, EffectTruth, Terms, per_sensor};
 use crate::error::Result;
-use crate::ops::Lag;
+use super::LagFilter as Lag;
 
 /// `c·exp(−(t − t_first)/tau)`: a warm-up transient, written exactly as
 /// `1 - (time_s - lag(time_s, tau)) / D` with `D = dt·e^(−dt/τ)/(1 − e^(−dt/τ))`.

@@ -5,7 +5,6 @@ use std::collections::BTreeMap;
 
 use crate::effects::{Context, EffectTruth};
 use crate::noise::NoiseSpec;
-use crate::ops;
 use crate::scenario::Scenario;
 use crate::sensor::SensorExt;
 use crate::truth::{Columns, NoiseTruth, ProfileTruth, TrueFeatures, Truth};
@@ -55,7 +54,7 @@ pub(super) fn truth(
         bias_std: bias.run.std(),
         bias_p2p: bias.p2p(),
         noise: noise_truth(sc, grid.h, drawn),
-        operators: ops::definitions().into_iter().collect(),
+        operators: crate::truth::operator_definitions(),
         notes: vec![
             "error = target - reference = sum of effects + noise".into(),
             "each effect = offset + sum(coefficients[i] * expressions[i]), evaluated over this file's columns with the operators listed, dt = step_s; exact up to float rounding".into(),
