@@ -55,9 +55,11 @@ impl FromStr for CenterSelection {
         match s {
             "kmeans" => Ok(Self::Kmeans),
             "ols" => Ok(Self::Ols),
-            _ => Err(TrainError::Invalid(format!(
-                "unknown center selection `{s}` (known: kmeans, ols)"
-            ))),
+            _ => Err(TrainError::Unknown {
+                what: "center selection",
+                name: s.into(),
+                known: "kmeans, ols".into(),
+            }),
         }
     }
 }

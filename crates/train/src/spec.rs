@@ -73,7 +73,7 @@ impl Spec {
         })?;
         toml::from_str(&text).map_err(|e| TrainError::Spec {
             file: path.display().to_string(),
-            message: e.to_string(),
+            source: Box::new(e),
         })
     }
 

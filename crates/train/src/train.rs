@@ -49,14 +49,21 @@ pub enum Method {
     Poly3,
 }
 
-impl fmt::Display for Method {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
+impl Method {
+    /// The method's name, as `--method` takes it.
+    pub fn name(self) -> &'static str {
+        match self {
             Self::Bayes => "bayes",
             Self::Mse => "mse",
             Self::Gradient => "gradient",
             Self::Poly3 => "poly3",
-        })
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -68,9 +75,11 @@ impl FromStr for Method {
             "mse" => Ok(Self::Mse),
             "gradient" => Ok(Self::Gradient),
             "poly3" => Ok(Self::Poly3),
-            _ => Err(TrainError::Invalid(format!(
-                "unknown method `{s}` (known: bayes, mse, gradient, poly3)"
-            ))),
+            _ => Err(TrainError::Unknown {
+                what: "method",
+                name: s.into(),
+                known: "bayes, mse, gradient, poly3".into(),
+            }),
         }
     }
 }
@@ -85,9 +94,11 @@ pub fn parse_sensor(s: &str) -> Result<SensorKind, TrainError> {
         "mems-accel" => SensorKind::MemsAccel,
         "other" => SensorKind::Other,
         _ => {
-            return Err(TrainError::Invalid(format!(
-                "unknown sensor `{s}` (known: rlg, qma, ifog, mems-gyro, mems-accel, other)"
-            )));
+            return Err(TrainError::Unknown {
+                what: "sensor",
+                name: s.into(),
+                known: "rlg, qma, ifog, mems-gyro, mems-accel, other".into(),
+            });
         }
     })
 }
@@ -171,10 +182,10 @@ impl FitOptions {
     /// Options from a spec (file and flags merged). Every number is range-checked here, with a
     /// message naming both the flag and the spec key (see [`crate::options`] for the bounds).
     pub fn from_spec(spec: &Spec) -> Result<Self, TrainError> {
-        let target = spec
-            .target
-            .clone()
-            .ok_or_else(|| TrainError::Invalid("no target: give --target COL".into()))?;
+        let target = spec.target.clone().ok_or(TrainError::Missing {
+            what: "target",
+            hint: "--target COL",
+        })?;
         let mut o = Self::new(&target, &[]);
         o.spec = FeatureSpec {
             signals: spec.signal.clone(),
@@ -238,12 +249,10 @@ impl FitOptions {
         if let (Some(f), Some(u)) = (o.from, o.until)
             && f >= u
         {
-            return Err(TrainError::Invalid(format!(
-                "--from {} / --until {} (spec keys `from`, `until`): an empty window; --from \
-                 must be before --until",
-                options::num(f),
-                options::num(u)
-            )));
+            return Err(TrainError::EmptyWindow {
+                from: options::num(f),
+                until: options::num(u),
+            });
         }
         Ok(o)
     }
@@ -437,14 +446,11 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
         && a > 0.0
         && a < step
     {
-        return Err(TrainError::Invalid(format!(
-            "--average {} (spec key `average`): shorter than the sampling step of {} ({} s), \
-             so a bin would hold no sample; use 0 for no averaging, or at least {} s",
-            options::num(a),
-            data.file(),
-            options::num(step),
-            options::num(step)
-        )));
+        return Err(TrainError::AverageBelowStep {
+            file: data.file().to_string(),
+            average: options::num(a),
+            step: options::num(step),
+        });
     }
     let mut average_s = opts
         .average_s
@@ -457,8 +463,9 @@ fn prepare(data: &Dataset, opts: &FitOptions) -> Result<Prepared, TrainError> {
     check_memory(opts, time, b.len(), &data)?;
     // The program actually stored (poly3 rewrites it around one clamped temperature).
     let spec = if opts.method == Method::Poly3 {
-        let expr = opts.spec.features.first().ok_or_else(|| {
-            TrainError::Invalid("poly3 needs one feature: the temperature expression".into())
+        let expr = opts.spec.features.first().ok_or(TrainError::MethodNeeds {
+            method: "poly3",
+            what: "one feature: the temperature expression",
         })?;
         if opts.spec.features.len() > 1 {
             warnings.push(format!(
@@ -600,22 +607,24 @@ fn check_memory(
         Some(_) => "unaveraged".to_string(),
         None => "averaged".to_string(),
     };
-    Err(TrainError::Invalid(format!(
-        "{}: a {} fit of {} rows {averaged} ({samples} samples) would need about {} of memory, \
-         more than the {} allowed{}",
-        data.file(),
-        opts.method,
-        time.len(),
-        human(need),
-        human(opts.memory_budget),
-        match suggestion {
-            Some(a) => format!(
-                "; average into bins (e.g. --average {a}, which needs {}; without --average the \
+    Err(TrainError::OverMemoryBudget(Box::new(
+        crate::error::OverBudget {
+            file: data.file().to_string(),
+            method: opts.method.name(),
+            rows: time.len(),
+            averaged,
+            samples,
+            need: human(need),
+            budget: human(opts.memory_budget),
+            suggestion: match suggestion {
+                Some(a) => format!(
+                    "; average into bins (e.g. --average {a}, which needs {}; without --average the \
                  default is {DEFAULT_AVERAGE_S} s), or pick a shorter window with --from/--until",
-                human(estimate(&shape(opts, time.len(), bins(time, a).len())))
-            ),
-            None => "; pick a shorter window with --from/--until".to_string(),
-        }
+                    human(estimate(&shape(opts, time.len(), bins(time, a).len())))
+                ),
+                None => "; pick a shorter window with --from/--until".to_string(),
+            },
+        },
     )))
 }
 
@@ -676,9 +685,11 @@ pub fn fit_with_progress(
                 seed: opts.seed,
             };
             let offered = cubic.as_ref().map(|c| c.rows.as_slice());
-            let f = bayes::fit_offering_cubic(&x, &y, offered, &bo).ok_or_else(|| {
-                TrainError::Invalid("the evidence iteration failed on every setting".into())
-            })?;
+            let f =
+                bayes::fit_offering_cubic(&x, &y, offered, &bo).ok_or(TrainError::FitFailed {
+                    method: "bayes",
+                    what: "the evidence iteration failed on every setting",
+                })?;
             if let (Basis::Cubic, Some(c)) = (f.basis, cubic) {
                 spec = c.spec;
                 ranges.extend(c.ranges);

@@ -25,13 +25,13 @@ pub struct Args {
     #[arg(long)]
     pub temperature: Option<String>,
     /// Evaluate only rows with time ≥ this (s).
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::from_s)]
     pub from: Option<f64>,
     /// Evaluate only rows with time < this (s).
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::until_s)]
     pub until: Option<f64>,
     /// Steps longer than this (s) are gaps [default: 10× the median step].
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::interval_s)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::gap_s)]
     pub gap: Option<f64>,
     /// Print JSON.
     #[arg(long)]

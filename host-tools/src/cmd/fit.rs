@@ -56,7 +56,7 @@ pub struct Args {
     #[arg(long)]
     pub select: Option<String>,
     /// Steps longer than this (s) are gaps [default: 10× the median step].
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::interval_s)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::gap_s)]
     pub gap: Option<f64>,
     /// k-means seed.
     #[arg(long, allow_negative_numbers = true, value_parser = super::check::seed)]
@@ -74,10 +74,10 @@ pub struct Args {
     #[arg(long)]
     pub unit: Option<String>,
     /// Train only on rows with time ≥ this (s).
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::from_s)]
     pub from: Option<f64>,
     /// Train only on rows with time < this (s).
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::check::until_s)]
     pub until: Option<f64>,
     /// Print the summary as JSON.
     #[arg(long)]
