@@ -362,46 +362,110 @@ pub fn fit_offering_cubic(
     cubic: Option<&[Vec<f64>]>,
     opts: &BayesOptions,
 ) -> Option<BayesFit> {
-    let n = x.len();
-    let d = x.first().map_or(0, Vec::len);
-    let (xm, xs) = mean_std(x);
-    let unit: Vec<f64> = xs.iter().map(|s| 1.0 / s.max(1e-300)).collect();
-    let xstd = normalise_rows(x, &xm, &unit);
-    let ym = y.iter().sum::<f64>() / n.max(1) as f64;
-    let ys = (y.iter().map(|v| (v - ym) * (v - ym)).sum::<f64>() / n.max(1) as f64)
-        .sqrt()
-        .max(1e-300);
-    let yn = DVector::from_iterator(n, y.iter().map(|v| (v - ym) / ys));
-    let nl = if opts.linear { d } else { 0 };
-    let grid: Vec<usize> = match opts.centers {
-        Some(m) => vec![m],
-        None => CENTER_GRID
+    let search = Search::new(x, y, opts);
+    let mut evaluated = 0;
+    let grid = search.grid();
+    let mut best = search.first_scan(&grid, &mut evaluated)?;
+    let margin = search.margin(&best);
+    if best.m > 0 {
+        best = search.refine(best, margin, &mut evaluated)?;
+    }
+    best = search.other_centers(&grid, best, &mut evaluated)?;
+    // The cubic in the first feature, when offered: one candidate of its own basis.
+    let cubic = cubic.and_then(|p| cubic_candidate(&search.xmat, p, &search.yn));
+    evaluated += usize::from(cubic.is_some());
+    search.choose(best, cubic, margin, evaluated)
+}
+
+/// The standardised problem of one evidence search, and the best candidate seen so far for each
+/// number of centers (for the parsimony rule).
+struct Search<'o> {
+    opts: &'o BayesOptions,
+    /// Feature means and inverse standard deviations.
+    xm: Vec<f64>,
+    unit: Vec<f64>,
+    /// Target mean and standard deviation.
+    ym: f64,
+    ys: f64,
+    /// Standardised rows, as rows and as a matrix.
+    xstd: Vec<Vec<f64>>,
+    xmat: DMatrix<f64>,
+    /// Standardised targets.
+    yn: DVector<f64>,
+    /// Linear columns.
+    nl: usize,
+    best_per_m: Mutex<BTreeMap<usize, Candidate>>,
+}
+
+impl<'o> Search<'o> {
+    fn new(x: &[Vec<f64>], y: &[f64], opts: &'o BayesOptions) -> Self {
+        let n = x.len();
+        let d = x.first().map_or(0, Vec::len);
+        let (xm, xs) = mean_std(x);
+        let unit: Vec<f64> = xs.iter().map(|s| 1.0 / s.max(1e-300)).collect();
+        let xstd = normalise_rows(x, &xm, &unit);
+        let ym = y.iter().sum::<f64>() / n.max(1) as f64;
+        let ys = (y.iter().map(|v| (v - ym) * (v - ym)).sum::<f64>() / n.max(1) as f64)
+            .sqrt()
+            .max(1e-300);
+        let yn = DVector::from_iterator(n, y.iter().map(|v| (v - ym) / ys));
+        let xmat = DMatrix::from_fn(n, d, |i, k| {
+            xstd.get(i).and_then(|r| r.get(k)).copied().unwrap_or(0.0)
+        });
+        Self {
+            opts,
+            xm,
+            unit,
+            ym,
+            ys,
+            xstd,
+            xmat,
+            yn,
+            nl: if opts.linear { d } else { 0 },
+            best_per_m: Mutex::new(BTreeMap::new()),
+        }
+    }
+
+    fn n(&self) -> usize {
+        self.xstd.len()
+    }
+
+    fn d(&self) -> usize {
+        self.xmat.ncols()
+    }
+
+    /// The numbers of centers compared: the one asked for, or those the data can carry (3 rows per
+    /// center at least).
+    fn grid(&self) -> Vec<usize> {
+        match self.opts.centers {
+            Some(m) => vec![m],
+            None => CENTER_GRID
+                .iter()
+                .copied()
+                .filter(|&m| m == 0 || m * 3 <= self.n())
+                .collect(),
+        }
+    }
+
+    /// k-means in the space the length scales define, returned in standardised units.
+    fn cluster(&self, m: usize, ls: &[f64]) -> Centers {
+        let scaled: Vec<Vec<f64>> = self
+            .xstd
             .iter()
-            .copied()
-            .filter(|&m| m == 0 || m * 3 <= n)
-            .collect(),
-    };
-    let scaled = |ls: &[f64]| -> Vec<Vec<f64>> {
-        xstd.iter()
             .map(|r| r.iter().zip(ls).map(|(v, l)| v / l).collect())
-            .collect()
-    };
-    // k-means in the space the length scales define, returned in standardised units.
-    let cluster = |m: usize, ls: &[f64]| -> Centers {
+            .collect();
         Arc::new(
-            kmeans(&scaled(ls), m, opts.seed)
+            kmeans(&scaled, m, self.opts.seed)
                 .into_iter()
                 .map(|c| c.iter().zip(ls).map(|(v, l)| v * l).collect())
                 .collect(),
         )
-    };
-    let best_per_m: Mutex<BTreeMap<usize, Candidate>> = Mutex::new(BTreeMap::new());
-    let xmat = DMatrix::from_fn(n, d, |i, k| {
-        xstd.get(i).and_then(|r| r.get(k)).copied().unwrap_or(0.0)
-    });
-    let evaluate = |m: usize, sigma: f64, ls: &[f64], centers: &Centers| -> Option<Candidate> {
-        let phi = candidate_design(&xmat, opts.linear, ls, centers, sigma);
-        let fit = evidence_fit(&phi, &yn, nl)?;
+    }
+
+    /// The evidence fit of one setting, remembered as the best of its number of centers if it is.
+    fn evaluate(&self, m: usize, sigma: f64, ls: &[f64], centers: &Centers) -> Option<Candidate> {
+        let phi = candidate_design(&self.xmat, self.opts.linear, ls, centers, sigma);
+        let fit = evidence_fit(&phi, &self.yn, self.nl)?;
         let c = Candidate {
             m,
             sigma,
@@ -409,54 +473,61 @@ pub fn fit_offering_cubic(
             centers: Arc::clone(centers),
             fit,
         };
-        if let Ok(mut per) = best_per_m.lock() {
+        if let Ok(mut per) = self.best_per_m.lock() {
             let e = per.entry(m).or_insert_with(|| c.clone());
             if c.fit.ev.log_evidence > e.fit.ev.log_evidence {
                 *e = c.clone();
             }
         }
         Some(c)
-    };
-    let better = |a: &Candidate, b: &Candidate| a.fit.ev.log_evidence > b.fit.ev.log_evidence;
-    let pick = |cands: Vec<Option<Candidate>>, best: Option<Candidate>| {
-        let mut best = best;
-        for c in cands.into_iter().flatten() {
-            if best.as_ref().is_none_or(|b| better(&c, b)) {
-                best = Some(c);
-            }
-        }
-        best
-    };
-    let mut evaluated = 0;
-    let ones = vec![1.0; d];
-    let per_m: Vec<(usize, Centers)> = grid.par_iter().map(|&m| (m, cluster(m, &ones))).collect();
-    let settings: Vec<(usize, f64, &Centers)> = per_m
-        .iter()
-        .flat_map(|(m, c)| {
-            let ws: &[f64] = if *m == 0 {
-                &WIDTHS[3..4]
-            } else {
-                &FIRST_WIDTHS
-            };
-            ws.iter().map(move |&s| (*m, s, c))
-        })
-        .collect();
-    evaluated += settings.len();
-    let mut best = pick(
-        settings
+    }
+
+    /// Every number of centers with every other width and unit length scales.
+    fn first_scan(&self, grid: &[usize], evaluated: &mut usize) -> Option<Candidate> {
+        let ones = vec![1.0; self.d()];
+        let per_m: Vec<(usize, Centers)> = grid
             .par_iter()
-            .map(|&(m, s, c)| evaluate(m, s, &ones, c))
-            .collect(),
-        None,
-    )?;
-    let margin = {
-        let phi = candidate_design(&xmat, opts.linear, &best.ls, &best.centers, best.sigma);
-        let r = &yn - phi * DVector::from_column_slice(&best.fit.w);
+            .map(|&m| (m, self.cluster(m, &ones)))
+            .collect();
+        let settings: Vec<(usize, f64, &Centers)> = per_m
+            .iter()
+            .flat_map(|(m, c)| {
+                let ws: &[f64] = if *m == 0 {
+                    &WIDTHS[3..4]
+                } else {
+                    &FIRST_WIDTHS
+                };
+                ws.iter().map(move |&s| (*m, s, c))
+            })
+            .collect();
+        *evaluated += settings.len();
+        pick(
+            settings
+                .par_iter()
+                .map(|&(m, s, c)| self.evaluate(m, s, &ones, c))
+                .collect(),
+            None,
+        )
+    }
+
+    /// The Occam margin, from the serial correlation of the first scan's best model's residual.
+    fn margin(&self, best: &Candidate) -> f64 {
+        let phi = candidate_design(
+            &self.xmat,
+            self.opts.linear,
+            &best.ls,
+            &best.centers,
+            best.sigma,
+        );
+        let r = &self.yn - phi * DVector::from_column_slice(&best.fit.w);
         PARSIMONY * margin_inflation(r.as_slice())
-    };
-    if best.m > 0 {
+    }
+
+    /// One round of coordinate search: a walk along each feature's length scale, one re-clustering
+    /// for the scales found (kept if the evidence agrees), a walk along the width.
+    fn refine(&self, mut best: Candidate, margin: f64, evaluated: &mut usize) -> Option<Candidate> {
         let start_ls = best.ls.clone();
-        for k in 0..d {
+        for k in 0..self.d() {
             let (m, s, old_ls) = (best.m, best.sigma, best.ls.clone());
             let centers = Arc::clone(&best.centers);
             let with = |v: f64| {
@@ -464,97 +535,128 @@ pub fn fit_offering_cubic(
                 if let Some(l) = ls.get_mut(k) {
                     *l = v;
                 }
-                evaluate(m, s, &ls, &centers)
+                self.evaluate(m, s, &ls, &centers)
             };
             let current = old_ls.get(k).copied().unwrap_or(1.0);
-            best = walk(
-                &LENGTH_SCALES,
-                current,
-                true,
-                margin,
-                best,
-                with,
-                &mut evaluated,
-            );
+            best = walk(&LENGTH_SCALES, current, true, margin, best, with, evaluated);
         }
         if best.ls != start_ls {
-            evaluated += 1;
-            let c = cluster(best.m, &best.ls);
-            let again = evaluate(best.m, best.sigma, &best.ls, &c);
+            *evaluated += 1;
+            let c = self.cluster(best.m, &best.ls);
+            let again = self.evaluate(best.m, best.sigma, &best.ls, &c);
             best = pick(vec![again], Some(best))?;
         }
         let (m, s, ls) = (best.m, best.sigma, best.ls.clone());
         let centers = Arc::clone(&best.centers);
-        best = walk(
+        Some(walk(
             &WIDTHS,
             s,
             false,
             margin,
             best,
-            |s| evaluate(m, s, &ls, &centers),
-            &mut evaluated,
-        );
+            |s| self.evaluate(m, s, &ls, &centers),
+            evaluated,
+        ))
     }
-    let others: Vec<usize> = grid.iter().copied().filter(|&m| m != best.m).collect();
-    evaluated += others.len();
-    let (s, ls) = (best.sigma, best.ls.clone());
-    let res = others
-        .par_iter()
-        .map(|&m| evaluate(m, s, &ls, &cluster(m, &ls)))
-        .collect();
-    best = pick(res, Some(best))?;
-    // The cubic in the first feature, when offered: one candidate of its own basis.
-    let cubic = cubic.and_then(|p| cubic_candidate(&xmat, p, &yn));
-    evaluated += usize::from(cubic.is_some());
-    // Parsimony: the simplest model whose evidence is not strongly worse than the best's, in the
-    // order linear alone (0 centers), the cubic, then ever more centers.
-    let per: Vec<Candidate> = best_per_m
-        .into_inner()
-        .map(|per| per.into_values().collect())
-        .unwrap_or_default();
-    let ev = |f: &Fitted| f.ev.log_evidence;
-    let top = cubic
-        .as_ref()
-        .map_or(ev(&best.fit), |c| ev(&best.fit).max(ev(&c.fit)));
-    let gauss_top = ev(&best.fit);
-    let linear_only = per.iter().find(|c| c.m == 0 && ev(&c.fit) >= top - margin);
-    let choose_cubic =
-        linear_only.is_none() && cubic.as_ref().is_some_and(|c| ev(&c.fit) >= top - margin);
-    if let (true, Some(c)) = (choose_cubic, cubic.as_ref()) {
-        return Some(c.finish(&xm, &unit, ym, ys, n, evaluated, gauss_top));
+
+    /// The other numbers of centers at the width and length scales found.
+    fn other_centers(
+        &self,
+        grid: &[usize],
+        best: Candidate,
+        evaluated: &mut usize,
+    ) -> Option<Candidate> {
+        let others: Vec<usize> = grid.iter().copied().filter(|&m| m != best.m).collect();
+        *evaluated += others.len();
+        let (s, ls) = (best.sigma, best.ls.clone());
+        let res = others
+            .par_iter()
+            .map(|&m| self.evaluate(m, s, &ls, &self.cluster(m, &ls)))
+            .collect();
+        pick(res, Some(best))
     }
-    if let Some(c) = per.into_iter().find(|c| ev(&c.fit) >= top - margin) {
-        best = c;
+
+    /// Parsimony: the simplest model whose evidence is not strongly worse than the best's, in the
+    /// order linear alone (0 centers), the cubic, then ever more centers.
+    fn choose(
+        &self,
+        mut best: Candidate,
+        cubic: Option<CubicCandidate>,
+        margin: f64,
+        evaluated: usize,
+    ) -> Option<BayesFit> {
+        let n = self.n();
+        let per: Vec<Candidate> = self
+            .best_per_m
+            .lock()
+            .map(|mut per| std::mem::take(&mut *per).into_values().collect())
+            .unwrap_or_default();
+        let ev = |f: &Fitted| f.ev.log_evidence;
+        let top = cubic
+            .as_ref()
+            .map_or(ev(&best.fit), |c| ev(&best.fit).max(ev(&c.fit)));
+        let gauss_top = ev(&best.fit);
+        let linear_only = per.iter().find(|c| c.m == 0 && ev(&c.fit) >= top - margin);
+        let choose_cubic =
+            linear_only.is_none() && cubic.as_ref().is_some_and(|c| ev(&c.fit) >= top - margin);
+        if let (true, Some(c)) = (choose_cubic, cubic.as_ref()) {
+            let (xm, unit, ym, ys) = (&self.xm, &self.unit, self.ym, self.ys);
+            return Some(c.finish(xm, unit, ym, ys, n, evaluated, gauss_top));
+        }
+        if let Some(c) = per.into_iter().find(|c| ev(&c.fit) >= top - margin) {
+            best = c;
+        }
+        let other = cubic.map(|c| ev(&c.fit) - n as f64 * self.ys.ln());
+        Some(self.gaussian_fit(best, evaluated, other))
     }
-    let zc: Vec<Vec<f64>> = best
-        .centers
-        .iter()
-        .map(|c| c.iter().zip(&best.ls).map(|(v, l)| v / l).collect())
-        .collect();
-    let (b0, lin, wg) = split_weights(&best.fit.w, nl);
-    let scale: Vec<f64> = unit.iter().zip(&best.ls).map(|(u, l)| u / l).collect();
-    let rbf = Rbf64 {
-        offset: xm,
-        scale,
-        gamma: vec![1.0 / (2.0 * best.sigma * best.sigma); zc.len()],
-        centers: zc,
-        weights: wg.iter().map(|w| w * ys).collect(),
-        linear: if opts.linear {
-            lin.iter().zip(&best.ls).map(|(w, l)| w * l * ys).collect()
-        } else {
-            vec![0.0; d]
-        },
-        bias: ym + ys * b0,
-    };
-    Some(BayesFit {
-        rbf,
-        evidence: to_target_units(best.fit.ev, ys, n),
-        width: best.sigma,
-        length_scales: best.ls,
-        evaluated,
-        basis: Basis::Gaussians,
-        other_basis_log_evidence: cubic.map(|c| ev(&c.fit) - n as f64 * ys.ln()),
-    })
+
+    /// The chosen Gaussian model as an [`Rbf64`] in the target's units.
+    fn gaussian_fit(&self, best: Candidate, evaluated: usize, other: Option<f64>) -> BayesFit {
+        let (d, ys) = (self.d(), self.ys);
+        let zc: Vec<Vec<f64>> = best
+            .centers
+            .iter()
+            .map(|c| c.iter().zip(&best.ls).map(|(v, l)| v / l).collect())
+            .collect();
+        let (b0, lin, wg) = split_weights(&best.fit.w, self.nl);
+        let scale: Vec<f64> = self.unit.iter().zip(&best.ls).map(|(u, l)| u / l).collect();
+        let rbf = Rbf64 {
+            offset: self.xm.clone(),
+            scale,
+            gamma: vec![1.0 / (2.0 * best.sigma * best.sigma); zc.len()],
+            centers: zc,
+            weights: wg.iter().map(|w| w * ys).collect(),
+            linear: if self.opts.linear {
+                lin.iter().zip(&best.ls).map(|(w, l)| w * l * ys).collect()
+            } else {
+                vec![0.0; d]
+            },
+            bias: self.ym + ys * b0,
+        };
+        BayesFit {
+            rbf,
+            evidence: to_target_units(best.fit.ev, ys, self.n()),
+            width: best.sigma,
+            length_scales: best.ls,
+            evaluated,
+            basis: Basis::Gaussians,
+            other_basis_log_evidence: other,
+        }
+    }
+}
+
+/// The best of `cands` and `best` by log evidence (the earlier on a tie).
+fn pick(cands: Vec<Option<Candidate>>, best: Option<Candidate>) -> Option<Candidate> {
+    let mut best = best;
+    for c in cands.into_iter().flatten() {
+        if best
+            .as_ref()
+            .is_none_or(|b| c.fit.ev.log_evidence > b.fit.ev.log_evidence)
+        {
+            best = Some(c);
+        }
+    }
+    best
 }
 
 /// Hyperparameters and evidence of a fit to targets normalised by `ys`, back in the target's units.
@@ -644,6 +746,76 @@ impl CubicCandidate {
             basis: Basis::Cubic,
             other_basis_log_evidence: Some(gauss_log_evidence - n as f64 * ys.ln()),
         }
+    }
+}
+
+/// The `bayes` method (the default).
+pub struct Bayes;
+
+impl crate::method::FitMethod for Bayes {
+    fn name(&self) -> &'static str {
+        "bayes"
+    }
+
+    fn about(&self) -> &'static str {
+        "centers, width and per-feature length scales chosen by MacKay's log evidence, compared \
+         with the cubic in the first feature (--no-cubic turns that off)"
+    }
+
+    fn min_samples(&self, _opts: &crate::train::FitOptions) -> usize {
+        10
+    }
+
+    /// Offers the cubic in the first feature when the linear term is on, the number of centers is
+    /// left to the evidence and the program with it fits the firmware; when the evidence chooses
+    /// it, the stored program and ranges become the cubic's.
+    fn fit(
+        &self,
+        set: &mut crate::method::TrainingSet,
+        opts: &crate::train::FitOptions,
+        _progress: &dyn crate::progress::Progress,
+    ) -> Result<crate::method::MethodFit, crate::error::TrainError> {
+        let cubic = if opts.linear && opts.cubic && opts.centers.is_none() {
+            let time = set.data.time(&opts.time)?;
+            crate::cubic::cubic_basis(
+                &set.spec,
+                &set.data,
+                time,
+                &set.starts,
+                &set.ranges,
+                &set.bins,
+            )?
+        } else {
+            None
+        };
+        let bo = BayesOptions {
+            linear: opts.linear,
+            centers: opts.centers,
+            seed: opts.seed,
+        };
+        let offered = cubic.as_ref().map(|c| c.rows.as_slice());
+        let f = fit_offering_cubic(&set.x, &set.y, offered, &bo).ok_or(
+            crate::error::TrainError::FitFailed {
+                method: "bayes",
+                what: "the evidence iteration failed on every setting",
+            },
+        )?;
+        if let (Basis::Cubic, Some(c)) = (f.basis, cubic) {
+            set.spec = c.spec;
+            set.ranges.extend(c.ranges);
+        }
+        Ok(crate::method::MethodFit {
+            rbf: f.rbf,
+            width: Some(f.width),
+            details: crate::method::MethodDetails {
+                length_scales: f.length_scales,
+                evidence: Some(f.evidence),
+                settings_evaluated: f.evaluated,
+                basis: Some(f.basis),
+                other_basis_log_evidence: f.other_basis_log_evidence,
+                select: None,
+            },
+        })
     }
 }
 

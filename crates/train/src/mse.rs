@@ -112,6 +112,64 @@ pub fn fit_selecting(
     })
 }
 
+/// The `mse` method.
+pub struct Mse;
+
+/// The centers asked for, or the default.
+fn centers(opts: &crate::train::FitOptions) -> usize {
+    opts.centers.unwrap_or(crate::method::DEFAULT_CENTERS)
+}
+
+impl crate::method::FitMethod for Mse {
+    fn name(&self) -> &'static str {
+        "mse"
+    }
+
+    fn about(&self) -> &'static str {
+        "the seed papers' traditional RBF, centers by k-means or orthogonal least squares \
+         (--select ols), one heuristic width, least squares"
+    }
+
+    fn centers_bound(&self) -> &'static crate::options::Bound {
+        &crate::options::CENTERS
+    }
+
+    fn check(&self, opts: &crate::train::FitOptions) -> Result<(), TrainError> {
+        crate::options::CENTERS
+            .check_count(centers(opts), " with --method mse")
+            .map(|_| ())
+    }
+
+    fn min_samples(&self, opts: &crate::train::FitOptions) -> usize {
+        2 * centers(opts) + 2
+    }
+
+    fn fit(
+        &self,
+        set: &mut crate::method::TrainingSet,
+        opts: &crate::train::FitOptions,
+        _progress: &dyn crate::progress::Progress,
+    ) -> Result<crate::method::MethodFit, TrainError> {
+        let m = centers(opts);
+        let rbf = fit_selecting(&set.x, &set.y, m, opts.seed, opts.select)?;
+        if rbf.centers.len() < m {
+            set.warnings.push(format!(
+                "{} of the {m} centers asked for: every further candidate was a \
+                 combination of those chosen, or the error was used up",
+                rbf.centers.len()
+            ));
+        }
+        Ok(crate::method::MethodFit {
+            rbf,
+            width: None,
+            details: crate::method::MethodDetails {
+                select: Some(opts.select),
+                ..Default::default()
+            },
+        })
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {

@@ -142,12 +142,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 }
 
 fn print_summary(s: &FitSummary, out: &std::path::Path) {
+    let d = &s.details;
     outln!("method      {}", s.method);
     for sig in &s.signals {
         outln!("signal      {sig}");
     }
     for (i, f) in s.features.iter().enumerate() {
         let ls = s
+            .details
             .length_scales
             .get(i)
             .map(|l| format!("  length scale {l:.3}"))
@@ -159,13 +161,13 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
             .unwrap_or_default();
         outln!("feature     {f}{ls}{lin}");
     }
-    let by = match s.select {
+    let by = match d.select {
         Some(CenterSelection::Kmeans) => ", placed by k-means",
         Some(CenterSelection::Ols) => ", chosen by orthogonal least squares",
         None => "",
     };
     outln!("centers     {} (width σ = {:.3}{by})", s.centers, s.width);
-    match (s.basis, s.other_basis_log_evidence) {
+    match (d.basis, d.other_basis_log_evidence) {
         (Some(Basis::Cubic), Some(other)) => outln!(
             "basis       cubic in the first feature (chosen by evidence; the best Gaussian model's log evidence is {other:.2})"
         ),
@@ -174,7 +176,7 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
         ),
         _ => {}
     }
-    if let Some(e) = &s.evidence {
+    if let Some(e) = &d.evidence {
         outln!(
             "evidence    α = {:.4e}  α_linear = {:.4e}  β = {:.4e}  γ = {:.2}  log evidence = {:.2}  ({} settings compared, {} iterations)",
             e.alpha,
@@ -182,7 +184,7 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
             e.beta,
             e.gamma,
             e.log_evidence,
-            s.settings_evaluated,
+            d.settings_evaluated,
             e.iterations
         );
     }
