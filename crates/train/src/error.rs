@@ -93,6 +93,18 @@ pub enum TrainError {
         #[source]
         source: Box<toml::de::Error>,
     },
+    /// A spec file sets a key no option has.
+    #[error("{file}: line {line}: unknown field `{key}`, expected one of: {known}")]
+    UnknownSpecKey {
+        /// File name.
+        file: String,
+        /// The 1-based line (0 when not found).
+        line: usize,
+        /// The key.
+        key: String,
+        /// The known keys.
+        known: String,
+    },
     /// A blob was rejected by the core (on encoding, decoding or loading into the firmware's types).
     #[error("{context}: {source}")]
     Blob {

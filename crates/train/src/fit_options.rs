@@ -9,7 +9,7 @@ use crate::features::FeatureSpec;
 use crate::method::Method;
 use crate::mse::CenterSelection;
 use crate::options;
-use crate::spec::Spec;
+use crate::spec::{ChannelOptions, MethodOptions, RunOptions, Spec};
 use tcomp_core::SensorKind;
 
 /// Parses a sensor kind name (rlg, qma, ifog, mems-gyro, mems-accel, other).
@@ -110,70 +110,37 @@ impl FitOptions {
     /// Options from a spec (file and flags merged). Every number is range-checked here, with a
     /// message naming both the flag and the spec key (see [`crate::options`] for the bounds).
     pub fn from_spec(spec: &Spec) -> Result<Self, TrainError> {
-        let target = spec.target.clone().ok_or(TrainError::Missing {
+        let target = spec.channel.target.clone().ok_or(TrainError::Missing {
             what: "target",
             hint: "--target COL",
         })?;
         let mut o = Self::new(&target, &[]);
         o.spec = FeatureSpec {
-            signals: spec.signal.clone(),
-            features: spec.feature.clone(),
+            signals: spec.features.signal.clone(),
+            features: spec.features.feature.clone(),
         };
-        if let Some(t) = &spec.time {
-            o.time.clone_from(t);
+        o.set_run(&spec.run)?;
+        o.set_method(&spec.method)?;
+        o.set_channel(&spec.channel)?;
+        Ok(o)
+    }
+
+    /// The reference, the window and the gap threshold.
+    fn set_run(&mut self, run: &RunOptions) -> Result<(), TrainError> {
+        self.reference.clone_from(&run.reference);
+        if let Some(v) = run.reference_value {
+            self.reference_value = Some(options::REFERENCE_VALUE.check(v)?);
         }
-        o.reference.clone_from(&spec.reference);
-        if let Some(v) = spec.reference_value {
-            o.reference_value = Some(options::REFERENCE_VALUE.check(v)?);
+        if let Some(g) = run.gap {
+            self.gap_s = Some(options::GAP.check(g)?);
         }
-        if let Some(m) = &spec.method {
-            o.method = m.parse()?;
+        if let Some(f) = run.from {
+            self.from = Some(options::FROM.check(f)?);
         }
-        if let Some(a) = spec.average {
-            o.average_s = Some(options::AVERAGE.check(a)?);
+        if let Some(u) = run.until {
+            self.until = Some(options::UNTIL.check(u)?);
         }
-        if let Some(c) = spec.centers {
-            o.method
-                .fitter()
-                .centers_bound()
-                .check_count(c, &format!(" with --method {}", o.method))?;
-        }
-        o.centers = spec.centers;
-        if let Some(l) = spec.linear {
-            o.linear = l;
-        }
-        if let Some(c) = spec.cubic {
-            o.cubic = c;
-        }
-        if let Some(s) = &spec.select {
-            o.select = s.parse()?;
-        }
-        if let Some(g) = spec.gap {
-            o.gap_s = Some(options::GAP.check(g)?);
-        }
-        if let Some(s) = spec.seed {
-            o.seed = s;
-        }
-        if let Some(i) = spec.iterations {
-            options::ITERATIONS.check_count(i, "")?;
-            o.iterations = i;
-        }
-        if let Some(s) = &spec.sensor {
-            o.sensor = parse_sensor(s)?;
-        }
-        if let Some(a) = &spec.axis {
-            o.axis.clone_from(a);
-        }
-        if let Some(u) = &spec.unit {
-            o.unit.clone_from(u);
-        }
-        if let Some(f) = spec.from {
-            o.from = Some(options::FROM.check(f)?);
-        }
-        if let Some(u) = spec.until {
-            o.until = Some(options::UNTIL.check(u)?);
-        }
-        if let (Some(f), Some(u)) = (o.from, o.until)
+        if let (Some(f), Some(u)) = (self.from, self.until)
             && f >= u
         {
             return Err(TrainError::EmptyWindow {
@@ -181,6 +148,56 @@ impl FitOptions {
                 until: options::num(u),
             });
         }
-        Ok(o)
+        Ok(())
+    }
+
+    /// The method and its settings (`--centers` is checked against the method's own bound).
+    fn set_method(&mut self, m: &MethodOptions) -> Result<(), TrainError> {
+        if let Some(name) = &m.method {
+            self.method = name.parse()?;
+        }
+        if let Some(a) = m.average {
+            self.average_s = Some(options::AVERAGE.check(a)?);
+        }
+        if let Some(c) = m.centers {
+            self.method
+                .fitter()
+                .centers_bound()
+                .check_count(c, &format!(" with --method {}", self.method))?;
+        }
+        self.centers = m.centers;
+        if let Some(l) = m.linear {
+            self.linear = l;
+        }
+        if let Some(c) = m.cubic {
+            self.cubic = c;
+        }
+        if let Some(s) = &m.select {
+            self.select = s.parse()?;
+        }
+        if let Some(s) = m.seed {
+            self.seed = s;
+        }
+        if let Some(i) = m.iterations {
+            self.iterations = options::ITERATIONS.check_count(i, "")?;
+        }
+        Ok(())
+    }
+
+    /// The columns and the blob's description of the channel (the target is read first).
+    fn set_channel(&mut self, c: &ChannelOptions) -> Result<(), TrainError> {
+        if let Some(t) = &c.time {
+            self.time.clone_from(t);
+        }
+        if let Some(s) = &c.sensor {
+            self.sensor = parse_sensor(s)?;
+        }
+        if let Some(a) = &c.axis {
+            self.axis.clone_from(a);
+        }
+        if let Some(u) = &c.unit {
+            self.unit.clone_from(u);
+        }
+        Ok(())
     }
 }

@@ -166,10 +166,10 @@ impl Method {
             .enumerate()
             .map(|(i, m)| {
                 let default = if i == 0 { " (default)" } else { "" };
-                format!("{}{default}: {}", m.name(), m.fitter().about())
+                format!("  {}{default}: {}", m.name(), m.fitter().about())
             })
             .collect();
-        format!("Method: {}", list.join("; "))
+        format!("Method:\n{}", list.join("\n"))
     }
 }
 
@@ -210,7 +210,7 @@ mod tests {
             assert_eq!(m.name().parse::<Method>().ok(), Some(m));
             assert!(help.contains(m.name()), "{help}");
         }
-        assert!(help.starts_with("Method: bayes (default)"), "{help}");
+        assert!(help.starts_with("Method:\n  bayes (default): "), "{help}");
         let e = "magic".parse::<Method>().err().map(|e| e.to_string());
         assert_eq!(
             e.as_deref(),

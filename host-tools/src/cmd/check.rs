@@ -8,7 +8,9 @@
 //! option's name in front of the message (`invalid value 'nan' for '--bin <BIN>': …`) and exits with
 //! its usage code, 2; each message states the valid range. Every flag using these also sets
 //! `allow_negative_numbers`, so `--average -5` reaches the check instead of being taken for a flag.
-//! The trainer checks spec files and library callers against the same bounds, so the two cannot
+//! The trainer's own flags (`fit`'s and the run's: `--average`, `--centers`, `--from`, …) take
+//! their parsers from the table directly, in the option structs of `tcomp_train::spec`; the
+//! trainer checks spec files and library callers against the same bounds, so the two cannot
 //! disagree.
 
 use tcomp_train::options as o;
@@ -16,31 +18,6 @@ use tcomp_train::options as o;
 /// A bin length in seconds ([`o::BIN`]).
 pub fn interval_s(s: &str) -> Result<f64, String> {
     o::BIN.parse(s)
-}
-
-/// `--gap` ([`o::GAP`]).
-pub fn gap_s(s: &str) -> Result<f64, String> {
-    o::GAP.parse(s)
-}
-
-/// `fit --average`: 0 (no averaging) or an interval ([`o::AVERAGE`]).
-pub fn average_s(s: &str) -> Result<f64, String> {
-    o::AVERAGE.parse(s)
-}
-
-/// `--from` ([`o::FROM`]).
-pub fn from_s(s: &str) -> Result<f64, String> {
-    o::FROM.parse(s)
-}
-
-/// `--until` ([`o::UNTIL`]).
-pub fn until_s(s: &str) -> Result<f64, String> {
-    o::UNTIL.parse(s)
-}
-
-/// A constant reference ([`o::REFERENCE_VALUE`]).
-pub fn reference_value(s: &str) -> Result<f64, String> {
-    o::REFERENCE_VALUE.parse(s)
 }
 
 /// `demo --step` ([`o::DEMO_STEP`]).
@@ -63,17 +40,6 @@ pub fn top(s: &str) -> Result<usize, String> {
     o::TOP.parse_count(s)
 }
 
-/// `fit --centers` before the method is known: from 0 (no Gaussians) to what a host blob holds
-/// ([`o::CENTERS_BAYES`]); the trainer refuses 0 for `mse` and `gradient` once it knows the method.
-pub fn centers(s: &str) -> Result<usize, String> {
-    o::CENTERS_BAYES.parse_count(s)
-}
-
-/// `fit --iterations` ([`o::ITERATIONS`]).
-pub fn iterations(s: &str) -> Result<usize, String> {
-    o::ITERATIONS.parse_count(s)
-}
-
 /// A seed: any 64-bit unsigned integer.
 pub fn seed(s: &str) -> Result<u64, String> {
     o::parse_seed(s)
@@ -89,10 +55,13 @@ mod tests {
             let e = interval_s(s).err().unwrap_or_default();
             assert!(e.contains("finite") && e.contains("seconds"), "{s}: {e}");
             assert!(
-                reference_value(s).is_err() && min_evidence(s).is_err(),
+                o::REFERENCE_VALUE.parse(s).is_err() && min_evidence(s).is_err(),
                 "{s}"
             );
-            assert!(from_s(s).is_err() && average_s(s).is_err(), "{s}");
+            assert!(
+                o::FROM.parse(s).is_err() && o::AVERAGE.parse(s).is_err(),
+                "{s}"
+            );
         }
     }
 
@@ -103,23 +72,23 @@ mod tests {
         assert_eq!(interval_s("1e7"), Ok(o::MAX_INTERVAL_S));
         for s in ["0", "-5", "1e-300", "1e-4", "1.1e7", "abc", ""] {
             assert!(interval_s(s).is_err(), "{s}");
-            assert!(gap_s(s).is_err(), "{s}");
+            assert!(o::GAP.parse(s).is_err(), "{s}");
         }
-        assert_eq!(average_s("0"), Ok(0.0));
-        assert_eq!(average_s("30"), Ok(30.0));
+        assert_eq!(o::AVERAGE.parse("0"), Ok(0.0));
+        assert_eq!(o::AVERAGE.parse("30"), Ok(30.0));
         for s in ["-5", "1e-300", "-0.5", "1e8"] {
-            let e = average_s(s).err().unwrap_or_default();
+            let e = o::AVERAGE.parse(s).err().unwrap_or_default();
             assert!(e.contains("0 (off)"), "{s}: {e}");
         }
     }
 
     #[test]
     fn signed_values_keep_their_sign_within_bounds() {
-        assert_eq!(reference_value("-12.5"), Ok(-12.5));
-        assert!(reference_value("1e10").is_err());
-        assert_eq!(from_s("-1"), Ok(-1.0));
-        assert_eq!(until_s("1.7e9"), Ok(1.7e9));
-        assert!(from_s("1e11").is_err() && until_s("-1e11").is_err());
+        assert_eq!(o::REFERENCE_VALUE.parse("-12.5"), Ok(-12.5));
+        assert!(o::REFERENCE_VALUE.parse("1e10").is_err());
+        assert_eq!(o::FROM.parse("-1"), Ok(-1.0));
+        assert_eq!(o::UNTIL.parse("1.7e9"), Ok(1.7e9));
+        assert!(o::FROM.parse("1e11").is_err() && o::UNTIL.parse("-1e11").is_err());
         assert_eq!(demo_step_s("10"), Ok(10.0));
         assert!(demo_step_s("0.05").is_err() && demo_step_s("10.5").is_err());
         assert_eq!(percent("100"), Ok(100.0));
@@ -134,10 +103,16 @@ mod tests {
             let e = top(s).err().unwrap_or_default();
             assert!(e.contains("from 1 to 10000"), "{s}: {e}");
         }
-        assert_eq!(centers("0"), Ok(0));
-        assert_eq!(centers("64"), Ok(tcomp_core::HOST_CENTERS));
-        assert!(centers("65").is_err() && centers("-1").is_err());
-        assert!(iterations("0").is_err());
+        assert_eq!(o::CENTERS_BAYES.parse_count("0"), Ok(0));
+        assert_eq!(
+            o::CENTERS_BAYES.parse_count("64"),
+            Ok(tcomp_core::HOST_CENTERS)
+        );
+        assert!(
+            o::CENTERS_BAYES.parse_count("65").is_err()
+                && o::CENTERS_BAYES.parse_count("-1").is_err()
+        );
+        assert!(o::ITERATIONS.parse_count("0").is_err());
         assert_eq!(seed("18446744073709551615"), Ok(u64::MAX));
         assert!(seed("-1").is_err() && seed("18446744073709551616").is_err());
     }
