@@ -37,6 +37,7 @@ pub mod options;
 pub mod poly3;
 pub mod progress;
 pub mod rbf64;
+pub mod rows;
 pub mod spec;
 pub mod train;
 
