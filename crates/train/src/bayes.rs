@@ -341,6 +341,17 @@ impl crate::method::FitMethod for Bayes {
         10
     }
 
+    /// Standardised rows (twice: as rows and as a matrix), the k-means copy per thread, and one
+    /// design matrix `[1 | x | G]` per thread.
+    fn memory(&self, s: &crate::budget::Shape) -> f64 {
+        use crate::budget::rows_of;
+        let (m, d) = (s.samples, s.features);
+        let centers = s.centers.unwrap_or(32).min(m / 3);
+        2.0 * rows_of(m, d)
+            + s.threads as f64 * (rows_of(m, d) + 8.0 * m as f64 * (1 + d + centers) as f64)
+            + rows_of(m, 2)
+    }
+
     /// Offers the cubic in the first feature when the linear term is on, the number of centers is
     /// left to the evidence and the program with it fits the firmware; when the evidence chooses
     /// it, the stored program and ranges become the cubic's.

@@ -158,6 +158,11 @@ impl crate::method::FitMethod for Gradient {
         2 * centers(opts) + 2
     }
 
+    /// The `mse` starting point, and the normalised rows of the descent.
+    fn memory(&self, s: &crate::budget::Shape) -> f64 {
+        crate::mse::memory(s) + crate::budget::rows_of(s.samples, s.features)
+    }
+
     fn fit(
         &self,
         set: &mut crate::method::TrainingSet,

@@ -111,6 +111,9 @@ pub trait FitMethod: Sync {
     fn refuses_collinear(&self) -> bool {
         true
     }
+    /// The memory the method itself holds during a fit of this shape, bytes (its design matrices,
+    /// copies and candidates; [`crate::budget::estimate`] adds what every fit holds).
+    fn memory(&self, shape: &crate::budget::Shape) -> f64;
     /// Fits the model.
     fn fit(
         &self,

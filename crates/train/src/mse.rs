@@ -112,6 +112,19 @@ pub fn fit_selecting(
     })
 }
 
+/// The memory of a fit of `mse` (and of `gradient`'s starting point): the standardised rows, the
+/// candidates' Gaussians over every row with `--select ols`, and the least-squares solve.
+pub(crate) fn memory(s: &crate::budget::Shape) -> f64 {
+    let (m, mf) = (s.samples, s.samples as f64);
+    let centers = s.centers.unwrap_or(crate::method::DEFAULT_CENTERS);
+    let select = match s.select {
+        CenterSelection::Kmeans => 0.0,
+        // Every candidate's Gaussian over every row.
+        CenterSelection::Ols => 8.0 * mf * m.min(crate::ols::MAX_CANDIDATES) as f64 + 8.0 * mf,
+    };
+    crate::budget::rows_of(m, s.features) + select + crate::budget::lsq(m, centers)
+}
+
 /// The `mse` method.
 pub struct Mse;
 
@@ -142,6 +155,10 @@ impl crate::method::FitMethod for Mse {
 
     fn min_samples(&self, opts: &crate::train::FitOptions) -> usize {
         2 * centers(opts) + 2
+    }
+
+    fn memory(&self, s: &crate::budget::Shape) -> f64 {
+        memory(s)
     }
 
     fn fit(

@@ -109,6 +109,10 @@ impl FitMethod for Poly3 {
         })
     }
 
+    fn memory(&self, s: &crate::budget::Shape) -> f64 {
+        crate::budget::lsq(s.samples, 4)
+    }
+
     /// T, T², T³ of one temperature are collinear on purpose.
     fn refuses_collinear(&self) -> bool {
         false
