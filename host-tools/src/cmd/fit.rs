@@ -146,3 +146,53 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
     );
     outln!("wrote       {} ({} bytes)", out.display(), s.blob_bytes);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tcomp_train::layer::Layer;
+
+    /// The spec keys and the flags are the same fields: every key is a flag of `fit` (`--KEY`, or
+    /// `--no-KEY` for a switch that turns a default on off).
+    #[test]
+    fn every_spec_key_is_a_flag() {
+        let cmd = <Args as clap::Args>::augment_args(clap::Command::new("fit"));
+        let longs: Vec<String> = cmd
+            .get_arguments()
+            .filter_map(|a| a.get_long().map(str::to_string))
+            .collect();
+        let mut keys = Vec::new();
+        Spec::keys(&mut keys);
+        assert!(keys.len() >= 20, "{keys:?}");
+        for k in keys {
+            assert!(
+                longs.contains(&k) || longs.contains(&format!("no-{k}")),
+                "spec key `{k}` has no flag among {longs:?}"
+            );
+        }
+    }
+
+    /// An absent switch leaves the spec file's value; a given one overrides it.
+    #[test]
+    fn switches_are_unset_unless_given() {
+        let cmd = <Args as clap::Args>::augment_args(clap::Command::new("fit"));
+        let parse = |extra: &[&str]| {
+            let mut argv = vec!["fit", "--data", "d.csv", "--out", "m.tcm"];
+            argv.extend_from_slice(extra);
+            let m = cmd.clone().try_get_matches_from(argv).ok()?;
+            <Args as clap::FromArgMatches>::from_arg_matches(&m).ok()
+        };
+        let plain = parse(&[]).map(|a| (a.method.linear, a.method.cubic));
+        assert_eq!(plain, Some((None, None)));
+        let off = parse(&["--no-linear", "--no-cubic"]).map(|a| (a.method.linear, a.method.cubic));
+        assert_eq!(off, Some((Some(false), Some(false))));
+        let mut file = Spec::default();
+        file.method.linear = Some(false);
+        let flags = parse(&[]).map(|a| Spec {
+            method: a.method,
+            ..Spec::default()
+        });
+        let merged = file.merged(flags.unwrap_or_default());
+        assert_eq!(merged.method.linear, Some(false));
+    }
+}
