@@ -332,20 +332,22 @@ pub const UNTIL: Bound = Bound {
     ..FROM
 };
 
-/// `diagnose --min-evidence` (Δ ln evidence): below 0 a candidate the evidence prefers to leave
-/// out would pass; 10⁶ nats is a bound against typos only (odds of e^1000000 to one).
+/// `diagnose --min-evidence` (Δ ln evidence, a log odds): below 0 a candidate the evidence prefers
+/// to leave out would pass; 5 is "strong" on Jeffreys' scale, and above 100 (odds of e¹⁰⁰) no real
+/// candidate could pass. (The command line allowed up to 10⁶, a bound against typos only, and the
+/// diagnosis then refused anything above 100; the physical bound is the one kept.)
 pub const MIN_EVIDENCE: Bound = Bound {
     flag: "--min-evidence",
     key: "",
     min: 0.0,
     min_exclusive: false,
-    max: 1e6,
+    max: 100.0,
     unit: "",
-    why: "a Δ ln evidence",
+    why: "a Δ log evidence; 5 is strong on Jeffreys' scale",
 };
 
-/// `diagnose --min-improvement` (%): a residual cannot fall by more than all of it, and below 0 a
-/// candidate that makes the model worse would pass.
+/// `diagnose --min-improvement` (%): a residual cannot fall by more than all of it (100 % would
+/// demand a perfect fit), and below 0 a candidate that makes the model worse would pass.
 pub const MIN_IMPROVEMENT: Bound = Bound {
     flag: "--min-improvement",
     key: "",
@@ -353,7 +355,7 @@ pub const MIN_IMPROVEMENT: Bound = Bound {
     min_exclusive: false,
     max: 100.0,
     unit: "",
-    why: "a percentage of the held-out residual",
+    why: "the share (%) of the held-out residual a candidate must remove",
 };
 
 /// `diagnose --top`: at least one (a diagnosis printing no candidate hides its own evidence);
