@@ -103,7 +103,7 @@ fn refit_options(info: &ModelInfo, roles: &Roles, extra: &[String]) -> FitOption
 fn refit_log_evidence(info: &ModelInfo, roles: &Roles, data: &Dataset, extra: &[String]) -> f64 {
     tcomp_train::fit(data, &refit_options(info, roles, extra))
         .ok()
-        .and_then(|f| f.summary.evidence.map(|e| e.log_evidence))
+        .and_then(|f| f.summary.details.evidence.map(|e| e.log_evidence))
         .unwrap_or(f64::NEG_INFINITY)
 }
 

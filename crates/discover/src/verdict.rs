@@ -24,6 +24,9 @@ use crate::score::{BaseFigures, Scored};
 use serde::Serialize;
 use tcomp_train::TrainError;
 use tcomp_train::options::Bound;
+// `--min-evidence` and `--min-improvement` (and the strong-improvement threshold) are bounded by
+// the trainer's one table, which the command line parses with too.
+use tcomp_train::options::{MIN_EVIDENCE, MIN_IMPROVEMENT as IMPROVEMENT};
 
 /// The thresholds of the verdict.
 #[derive(Clone, Debug, Serialize)]
@@ -48,30 +51,6 @@ impl Default for Criterion {
         }
     }
 }
-
-/// `--min-evidence`: Δ log evidence is a log odds; 0 accepts any candidate that is not worse, 5 is
-/// "strong" on Jeffreys' scale, and above 100 (odds of e¹⁰⁰) no real candidate could pass.
-const MIN_EVIDENCE: Bound = Bound {
-    flag: "--min-evidence",
-    key: "",
-    min: 0.0,
-    min_exclusive: false,
-    max: 100.0,
-    unit: "",
-    why: "a Δ log evidence; 5 is strong on Jeffreys' scale",
-};
-
-/// `--min-improvement` (and the strong-improvement threshold): a percentage of the held-out
-/// residual removed; 100 % would demand a perfect fit.
-const IMPROVEMENT: Bound = Bound {
-    flag: "--min-improvement",
-    key: "",
-    min: 0.0,
-    min_exclusive: false,
-    max: 100.0,
-    unit: "%",
-    why: "the share of the held-out residual a candidate must remove",
-};
 
 /// The noise-floor multiple: 0 turns the leg off; above 100 nothing is ever above the floor.
 const FLOOR: Bound = Bound {

@@ -85,7 +85,7 @@ fn main() {
         "rows": train.len(),
         "bins": y.len(),
         "centers": f.summary.centers,
-        "settings_evaluated": f.summary.settings_evaluated,
+        "settings_evaluated": f.summary.details.settings_evaluated,
         "threads": rayon::current_num_threads(),
         "fit_s": median(t_fit),
         "features_bins_search_s": median(t_search),

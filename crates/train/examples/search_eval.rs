@@ -176,15 +176,15 @@ fn main() {
             r.residual_rms / -c.floor
         };
         let s = &f.summary;
-        let ev = s.evidence.as_ref().unwrap();
+        let ev = s.details.evidence.as_ref().unwrap();
         println!(
             "{:<22} le {:>10.3} m {:>2} s {:.2} ls {:?} evals {:>3} ratio {:.3}  {:.1} ms",
             c.name,
             ev.log_evidence,
             s.centers,
             s.width,
-            s.length_scales,
-            s.settings_evaluated,
+            s.details.length_scales,
+            s.details.settings_evaluated,
             ratio,
             el * 1e3
         );

@@ -39,13 +39,12 @@
 //! temperature the Gaussians win by far more than the margin and nothing changes (every simulated
 //! case of `search_eval` but one kept its model; that one, rate-driven with a cubic in T, improved).
 
-use crate::kmeans::kmeans;
-use crate::rbf64::{Rbf64, mean_std, normalise_rows, split_weights};
+mod search;
+
+use crate::rbf64::{Rbf64, mean_std, split_weights};
 use nalgebra::{DMatrix, DVector};
-use rayon::prelude::*;
+use search::Search;
 use serde::Serialize;
-use std::collections::BTreeMap;
-use std::sync::{Arc, Mutex};
 
 /// Options of the evidence search.
 #[derive(Clone, Debug)]
@@ -153,20 +152,6 @@ fn evidence_fit(phi: &DMatrix<f64>, y: &DVector<f64>, nl: usize) -> Option<Fitte
     })
 }
 
-/// Centers in standardised feature units, shared by the candidates of one scan.
-type Centers = Arc<Vec<Vec<f64>>>;
-
-#[derive(Clone)]
-struct Candidate {
-    m: usize,
-    sigma: f64,
-    ls: Vec<f64>,
-    /// Centers in standardised feature units (before the length scales).
-    centers: Centers,
-    fit: Fitted,
-}
-
-const WIDTHS: [f64; 8] = [0.35, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0];
 /// Every other width, for the first pass; the width walks later visit the values between.
 pub const FIRST_WIDTHS: [f64; 4] = [0.35, 0.7, 1.4, 2.8];
 /// Parsimony: the fewest centers whose log evidence is within this of the best one's is chosen.
@@ -206,134 +191,6 @@ pub fn margin_inflation(residual: &[f64]) -> f64 {
     }
     ((1.0 + rho) / (1.0 - rho).max(1e-9)).clamp(1.0, MAX_MARGIN_INFLATION)
 }
-const CENTER_GRID: [usize; 5] = [0, 4, 8, 16, 32];
-const LENGTH_SCALES: [f64; 8] = [0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 64.0];
-
-/// The design matrix of one candidate, straight from the standardised rows: `[1 | x_std | G]`
-/// with `G_ij = exp(−‖(x_i − c_j)/ls‖²/(2σ²))`. The linear columns are the standardised features
-/// themselves, whatever the length scales, so their prior does not move with them.
-fn candidate_design(
-    xstd: &DMatrix<f64>,
-    linear: bool,
-    ls: &[f64],
-    centers: &[Vec<f64>],
-    sigma: f64,
-) -> DMatrix<f64> {
-    let (n, d) = (xstd.nrows(), xstd.ncols());
-    let nl = if linear { d } else { 0 };
-    let mut phi = DMatrix::zeros(n, 1 + nl + centers.len());
-    let half_inv_s2 = 0.5 / (sigma * sigma);
-    let w: Vec<f64> = ls.iter().map(|l| half_inv_s2 / (l * l)).collect();
-    // Column-major storage: column j is the slice [j·n, (j+1)·n).
-    let x = xstd.as_slice();
-    let out = phi.as_mut_slice();
-    let mut cols = out.chunks_exact_mut(n.max(1));
-    if let Some(ones) = cols.next() {
-        ones.fill(1.0);
-    }
-    for (col, xk) in cols.by_ref().take(nl).zip(x.chunks_exact(n.max(1))) {
-        col.copy_from_slice(xk);
-    }
-    for (col, c) in cols.zip(centers) {
-        for ((ck, wk), xk) in c.iter().zip(&w).zip(x.chunks_exact(n.max(1))) {
-            for (acc, xv) in col.iter_mut().zip(xk) {
-                let dv = xv - ck;
-                *acc += wk * dv * dv;
-            }
-        }
-        for a in col.iter_mut() {
-            *a = (-*a).exp();
-        }
-    }
-    phi
-}
-
-/// A local search along one discrete grid, from `current`: both neighbours and, when `far_end`,
-/// the last grid value (a length scale of 64 standard deviations switches a feature off for the
-/// Gaussians, and the evidence often has a separate optimum there); then onward from the best of
-/// those, in the direction that raised the evidence, until it stops rising. This costs 3–5 fits
-/// instead of a scan of the whole grid and reaches the same optimum on the evidence surfaces of
-/// the test cases (`cargo run --release -p tcomp-train --example search_eval`).
-fn walk<E>(
-    grid: &[f64],
-    current: f64,
-    far_end: bool,
-    margin: f64,
-    best: Candidate,
-    eval: E,
-    evaluated: &mut usize,
-) -> Candidate
-where
-    E: Fn(f64) -> Option<Candidate> + Sync,
-{
-    let better = |a: &Candidate, b: &Candidate| a.fit.ev.log_evidence > b.fit.ev.log_evidence;
-    let Some(i0) = grid.iter().position(|&v| v == current) else {
-        return best;
-    };
-    let last = grid.len().saturating_sub(1);
-    let mut first: Vec<usize> = [i0.checked_sub(1), (i0 < last).then_some(i0 + 1)]
-        .into_iter()
-        .flatten()
-        .collect();
-    if far_end && i0 + 1 < last {
-        first.push(last);
-    }
-    *evaluated += first.len();
-    let found: Vec<(usize, Option<Candidate>)> = first
-        .par_iter()
-        .filter_map(|&i| grid.get(i).map(|&v| (i, eval(v))))
-        .collect();
-    let mut off = (far_end && i0 == last).then(|| best.clone());
-    let mut best = best;
-    let mut at = i0;
-    for (i, c) in found {
-        if let Some(c) = c {
-            if far_end && i == last {
-                off = Some(c.clone());
-            }
-            if better(&c, &best) {
-                best = c;
-                at = i;
-            }
-        }
-    }
-    // Occam on the feature: it enters the Gaussians only on strong evidence over leaving it to
-    // the linear term (the far end switches it off for them).
-    let prefer_off = |best: Candidate, off: Option<Candidate>| match off {
-        Some(o) if o.fit.ev.log_evidence >= best.fit.ev.log_evidence - margin => o,
-        _ => best,
-    };
-    if at == i0 {
-        return prefer_off(best, off);
-    }
-    // From a neighbour, keep going away from the start; from the far end, come back down.
-    let up = at > i0 && at != last || at == i0 + 1;
-    let mut tried_next = |next: usize, best: &mut Candidate, at: &mut usize| -> bool {
-        let Some(&v) = grid.get(next) else {
-            return false;
-        };
-        if next == i0 || (far_end && next == last) {
-            return false;
-        }
-        *evaluated += 1;
-        match eval(v) {
-            Some(c) if better(&c, best) => {
-                *best = c;
-                *at = next;
-                true
-            }
-            _ => false,
-        }
-    };
-    loop {
-        let next = if up { at + 1 } else { at.wrapping_sub(1) };
-        if !tried_next(next, &mut best, &mut at) {
-            break;
-        }
-    }
-    prefer_off(best, off)
-}
-
 /// Fits a Bayesian-regularised RBF to rows `x` (raw features) and targets `y`, choosing the number
 /// of centers, the width and the length scales by the log evidence.
 ///
@@ -362,199 +219,19 @@ pub fn fit_offering_cubic(
     cubic: Option<&[Vec<f64>]>,
     opts: &BayesOptions,
 ) -> Option<BayesFit> {
-    let n = x.len();
-    let d = x.first().map_or(0, Vec::len);
-    let (xm, xs) = mean_std(x);
-    let unit: Vec<f64> = xs.iter().map(|s| 1.0 / s.max(1e-300)).collect();
-    let xstd = normalise_rows(x, &xm, &unit);
-    let ym = y.iter().sum::<f64>() / n.max(1) as f64;
-    let ys = (y.iter().map(|v| (v - ym) * (v - ym)).sum::<f64>() / n.max(1) as f64)
-        .sqrt()
-        .max(1e-300);
-    let yn = DVector::from_iterator(n, y.iter().map(|v| (v - ym) / ys));
-    let nl = if opts.linear { d } else { 0 };
-    let grid: Vec<usize> = match opts.centers {
-        Some(m) => vec![m],
-        None => CENTER_GRID
-            .iter()
-            .copied()
-            .filter(|&m| m == 0 || m * 3 <= n)
-            .collect(),
-    };
-    let scaled = |ls: &[f64]| -> Vec<Vec<f64>> {
-        xstd.iter()
-            .map(|r| r.iter().zip(ls).map(|(v, l)| v / l).collect())
-            .collect()
-    };
-    // k-means in the space the length scales define, returned in standardised units.
-    let cluster = |m: usize, ls: &[f64]| -> Centers {
-        Arc::new(
-            kmeans(&scaled(ls), m, opts.seed)
-                .into_iter()
-                .map(|c| c.iter().zip(ls).map(|(v, l)| v * l).collect())
-                .collect(),
-        )
-    };
-    let best_per_m: Mutex<BTreeMap<usize, Candidate>> = Mutex::new(BTreeMap::new());
-    let xmat = DMatrix::from_fn(n, d, |i, k| {
-        xstd.get(i).and_then(|r| r.get(k)).copied().unwrap_or(0.0)
-    });
-    let evaluate = |m: usize, sigma: f64, ls: &[f64], centers: &Centers| -> Option<Candidate> {
-        let phi = candidate_design(&xmat, opts.linear, ls, centers, sigma);
-        let fit = evidence_fit(&phi, &yn, nl)?;
-        let c = Candidate {
-            m,
-            sigma,
-            ls: ls.to_vec(),
-            centers: Arc::clone(centers),
-            fit,
-        };
-        if let Ok(mut per) = best_per_m.lock() {
-            let e = per.entry(m).or_insert_with(|| c.clone());
-            if c.fit.ev.log_evidence > e.fit.ev.log_evidence {
-                *e = c.clone();
-            }
-        }
-        Some(c)
-    };
-    let better = |a: &Candidate, b: &Candidate| a.fit.ev.log_evidence > b.fit.ev.log_evidence;
-    let pick = |cands: Vec<Option<Candidate>>, best: Option<Candidate>| {
-        let mut best = best;
-        for c in cands.into_iter().flatten() {
-            if best.as_ref().is_none_or(|b| better(&c, b)) {
-                best = Some(c);
-            }
-        }
-        best
-    };
+    let search = Search::new(x, y, opts);
     let mut evaluated = 0;
-    let ones = vec![1.0; d];
-    let per_m: Vec<(usize, Centers)> = grid.par_iter().map(|&m| (m, cluster(m, &ones))).collect();
-    let settings: Vec<(usize, f64, &Centers)> = per_m
-        .iter()
-        .flat_map(|(m, c)| {
-            let ws: &[f64] = if *m == 0 {
-                &WIDTHS[3..4]
-            } else {
-                &FIRST_WIDTHS
-            };
-            ws.iter().map(move |&s| (*m, s, c))
-        })
-        .collect();
-    evaluated += settings.len();
-    let mut best = pick(
-        settings
-            .par_iter()
-            .map(|&(m, s, c)| evaluate(m, s, &ones, c))
-            .collect(),
-        None,
-    )?;
-    let margin = {
-        let phi = candidate_design(&xmat, opts.linear, &best.ls, &best.centers, best.sigma);
-        let r = &yn - phi * DVector::from_column_slice(&best.fit.w);
-        PARSIMONY * margin_inflation(r.as_slice())
-    };
+    let grid = search.grid();
+    let mut best = search.first_scan(&grid, &mut evaluated)?;
+    let margin = search.margin(&best);
     if best.m > 0 {
-        let start_ls = best.ls.clone();
-        for k in 0..d {
-            let (m, s, old_ls) = (best.m, best.sigma, best.ls.clone());
-            let centers = Arc::clone(&best.centers);
-            let with = |v: f64| {
-                let mut ls = old_ls.clone();
-                if let Some(l) = ls.get_mut(k) {
-                    *l = v;
-                }
-                evaluate(m, s, &ls, &centers)
-            };
-            let current = old_ls.get(k).copied().unwrap_or(1.0);
-            best = walk(
-                &LENGTH_SCALES,
-                current,
-                true,
-                margin,
-                best,
-                with,
-                &mut evaluated,
-            );
-        }
-        if best.ls != start_ls {
-            evaluated += 1;
-            let c = cluster(best.m, &best.ls);
-            let again = evaluate(best.m, best.sigma, &best.ls, &c);
-            best = pick(vec![again], Some(best))?;
-        }
-        let (m, s, ls) = (best.m, best.sigma, best.ls.clone());
-        let centers = Arc::clone(&best.centers);
-        best = walk(
-            &WIDTHS,
-            s,
-            false,
-            margin,
-            best,
-            |s| evaluate(m, s, &ls, &centers),
-            &mut evaluated,
-        );
+        best = search.refine(best, margin, &mut evaluated)?;
     }
-    let others: Vec<usize> = grid.iter().copied().filter(|&m| m != best.m).collect();
-    evaluated += others.len();
-    let (s, ls) = (best.sigma, best.ls.clone());
-    let res = others
-        .par_iter()
-        .map(|&m| evaluate(m, s, &ls, &cluster(m, &ls)))
-        .collect();
-    best = pick(res, Some(best))?;
+    best = search.other_centers(&grid, best, &mut evaluated)?;
     // The cubic in the first feature, when offered: one candidate of its own basis.
-    let cubic = cubic.and_then(|p| cubic_candidate(&xmat, p, &yn));
+    let cubic = cubic.and_then(|p| cubic_candidate(&search.xmat, p, &search.yn));
     evaluated += usize::from(cubic.is_some());
-    // Parsimony: the simplest model whose evidence is not strongly worse than the best's, in the
-    // order linear alone (0 centers), the cubic, then ever more centers.
-    let per: Vec<Candidate> = best_per_m
-        .into_inner()
-        .map(|per| per.into_values().collect())
-        .unwrap_or_default();
-    let ev = |f: &Fitted| f.ev.log_evidence;
-    let top = cubic
-        .as_ref()
-        .map_or(ev(&best.fit), |c| ev(&best.fit).max(ev(&c.fit)));
-    let gauss_top = ev(&best.fit);
-    let linear_only = per.iter().find(|c| c.m == 0 && ev(&c.fit) >= top - margin);
-    let choose_cubic =
-        linear_only.is_none() && cubic.as_ref().is_some_and(|c| ev(&c.fit) >= top - margin);
-    if let (true, Some(c)) = (choose_cubic, cubic.as_ref()) {
-        return Some(c.finish(&xm, &unit, ym, ys, n, evaluated, gauss_top));
-    }
-    if let Some(c) = per.into_iter().find(|c| ev(&c.fit) >= top - margin) {
-        best = c;
-    }
-    let zc: Vec<Vec<f64>> = best
-        .centers
-        .iter()
-        .map(|c| c.iter().zip(&best.ls).map(|(v, l)| v / l).collect())
-        .collect();
-    let (b0, lin, wg) = split_weights(&best.fit.w, nl);
-    let scale: Vec<f64> = unit.iter().zip(&best.ls).map(|(u, l)| u / l).collect();
-    let rbf = Rbf64 {
-        offset: xm,
-        scale,
-        gamma: vec![1.0 / (2.0 * best.sigma * best.sigma); zc.len()],
-        centers: zc,
-        weights: wg.iter().map(|w| w * ys).collect(),
-        linear: if opts.linear {
-            lin.iter().zip(&best.ls).map(|(w, l)| w * l * ys).collect()
-        } else {
-            vec![0.0; d]
-        },
-        bias: ym + ys * b0,
-    };
-    Some(BayesFit {
-        rbf,
-        evidence: to_target_units(best.fit.ev, ys, n),
-        width: best.sigma,
-        length_scales: best.ls,
-        evaluated,
-        basis: Basis::Gaussians,
-        other_basis_log_evidence: cubic.map(|c| ev(&c.fit) - n as f64 * ys.ln()),
-    })
+    search.choose(best, cubic, margin, evaluated)
 }
 
 /// Hyperparameters and evidence of a fit to targets normalised by `ys`, back in the target's units.
@@ -644,6 +321,87 @@ impl CubicCandidate {
             basis: Basis::Cubic,
             other_basis_log_evidence: Some(gauss_log_evidence - n as f64 * ys.ln()),
         }
+    }
+}
+
+/// The `bayes` method (the default).
+pub struct Bayes;
+
+impl crate::method::FitMethod for Bayes {
+    fn name(&self) -> &'static str {
+        "bayes"
+    }
+
+    fn about(&self) -> &'static str {
+        "centers, width and per-feature length scales chosen by MacKay's log evidence, compared \
+         with the cubic in the first feature (--no-cubic turns that off)"
+    }
+
+    fn min_samples(&self, _opts: &crate::train::FitOptions) -> usize {
+        10
+    }
+
+    /// Standardised rows (twice: as rows and as a matrix), the k-means copy per thread, and one
+    /// design matrix `[1 | x | G]` per thread.
+    fn memory(&self, s: &crate::budget::Shape) -> f64 {
+        use crate::budget::rows_of;
+        let (m, d) = (s.samples, s.features);
+        let centers = s.centers.unwrap_or(32).min(m / 3);
+        2.0 * rows_of(m, d)
+            + s.threads as f64 * (rows_of(m, d) + 8.0 * m as f64 * (1 + d + centers) as f64)
+            + rows_of(m, 2)
+    }
+
+    /// Offers the cubic in the first feature when the linear term is on, the number of centers is
+    /// left to the evidence and the program with it fits the firmware; when the evidence chooses
+    /// it, the stored program and ranges become the cubic's.
+    fn fit(
+        &self,
+        set: &mut crate::method::TrainingSet,
+        opts: &crate::train::FitOptions,
+        _progress: &dyn crate::progress::Progress,
+    ) -> Result<crate::method::MethodFit, crate::error::TrainError> {
+        let cubic = if opts.linear && opts.cubic && opts.centers.is_none() {
+            let time = set.data.time(&opts.time)?;
+            crate::cubic::cubic_basis(
+                &set.spec,
+                &set.data,
+                time,
+                &set.starts,
+                &set.ranges,
+                &set.bins,
+            )?
+        } else {
+            None
+        };
+        let bo = BayesOptions {
+            linear: opts.linear,
+            centers: opts.centers,
+            seed: opts.seed,
+        };
+        let offered = cubic.as_ref().map(|c| c.rows.as_slice());
+        let f = fit_offering_cubic(&set.x, &set.y, offered, &bo).ok_or(
+            crate::error::TrainError::FitFailed {
+                method: "bayes",
+                what: "the evidence iteration failed on every setting",
+            },
+        )?;
+        if let (Basis::Cubic, Some(c)) = (f.basis, cubic) {
+            set.spec = c.spec;
+            set.ranges.extend(c.ranges);
+        }
+        Ok(crate::method::MethodFit {
+            rbf: f.rbf,
+            width: Some(f.width),
+            details: crate::method::MethodDetails {
+                length_scales: f.length_scales,
+                evidence: Some(f.evidence),
+                settings_evaluated: f.evaluated,
+                basis: Some(f.basis),
+                other_basis_log_evidence: f.other_basis_log_evidence,
+                select: None,
+            },
+        })
     }
 }
 

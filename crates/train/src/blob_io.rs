@@ -88,9 +88,10 @@ impl OwnedModel {
     pub fn to_bytes(&self) -> Result<Vec<u8>, TrainError> {
         let model = self.model()?;
         let mut buf = vec![0u8; MAX_BLOB];
-        let len = model
-            .encode(&mut buf)
-            .map_err(|e| TrainError::Blob(format!("cannot encode the model: {e}")))?;
+        let len = model.encode(&mut buf).map_err(|e| TrainError::Blob {
+            context: "cannot encode the model".into(),
+            source: crate::error::Core(e),
+        })?;
         buf.truncate(len);
         Ok(buf)
     }
@@ -133,8 +134,10 @@ pub fn read(path: &Path) -> Result<Vec<u8>, TrainError> {
 
 /// Decodes a blob, naming the file and the reason when it is rejected.
 pub fn decode<'a>(path: &Path, bytes: &'a [u8]) -> Result<HostModel<'a>, TrainError> {
-    Model::decode(bytes)
-        .map_err(|e| TrainError::Blob(format!("{}: corrupt model blob: {e}", path.display())))
+    Model::decode(bytes).map_err(|e| TrainError::Blob {
+        context: format!("{}: corrupt model blob", path.display()),
+        source: crate::error::Core(e),
+    })
 }
 
 /// Checks that a blob loads into the reference firmware's model types
@@ -163,18 +166,18 @@ pub fn check_flight(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
         ));
     }
     if !over.is_empty() {
-        return Err(TrainError::Blob(format!(
-            "{}: the model does not fit the firmware: {}",
-            path.display(),
-            over.join(", ")
-        )));
+        return Err(TrainError::TooLargeForFlight {
+            file: path.display().to_string(),
+            over: over.join(", "),
+        });
     }
     Model::<'_, FLIGHT_CENTERS, FLIGHT_FEATURES, FLIGHT_NODES>::decode(bytes)
         .map(|_| ())
-        .map_err(|e| {
-            TrainError::Blob(format!(
-                "{}: the model does not load into the firmware's types: {e}",
+        .map_err(|e| TrainError::Blob {
+            context: format!(
+                "{}: the model does not load into the firmware's types",
                 path.display()
-            ))
+            ),
+            source: crate::error::Core(e),
         })
 }

@@ -36,7 +36,7 @@ pub struct Shape {
 }
 
 /// Bytes of a `Vec<Vec<f64>>` of `n` rows of `d` values (header, data and allocator overhead).
-fn rows_of(n: usize, d: usize) -> f64 {
+pub fn rows_of(n: usize, d: usize) -> f64 {
     n as f64 * (24.0 + 16.0 + 8.0 * d as f64)
 }
 
@@ -50,36 +50,15 @@ pub fn estimate(s: &Shape) -> u64 {
     let per_row = n * (8.0 + 8.0 + 4.0 * crate::features::F as f64 + 8.0 * d as f64 + 32.0);
     // The training rows the method sees.
     let train = rows_of(m, d) + 8.0 * mf;
-    // A least-squares solve by SVD holds the design, its copy and U.
-    let lsq = |cols: usize| 3.0 * 8.0 * mf * (1 + cols) as f64;
-    let method = match s.method {
-        Method::Bayes => {
-            let centers = s.centers.unwrap_or(32).min(m / 3);
-            // Standardised rows (twice: as rows and as a matrix), the k-means copy per thread,
-            // and one design matrix [1 | x | G] per thread.
-            2.0 * rows_of(m, d)
-                + s.threads as f64 * (rows_of(m, d) + 8.0 * mf * (1 + d + centers) as f64)
-                + rows_of(m, 2)
-        }
-        Method::Mse | Method::Gradient => {
-            let centers = s.centers.unwrap_or(crate::train::DEFAULT_CENTERS);
-            let select = match s.select {
-                CenterSelection::Kmeans => 0.0,
-                // Every candidate's Gaussian over every row.
-                CenterSelection::Ols => {
-                    8.0 * mf * m.min(crate::ols::MAX_CANDIDATES) as f64 + 8.0 * mf
-                }
-            };
-            let grad = if s.method == Method::Gradient {
-                rows_of(m, d)
-            } else {
-                0.0
-            };
-            rows_of(m, d) + select + lsq(centers) + grad
-        }
-        Method::Poly3 => lsq(4),
-    };
+    // What the method itself holds (its design matrices, copies, candidates).
+    let method = s.method.fitter().memory(s);
     (per_row + train + method) as u64
+}
+
+/// Bytes of a least-squares solve by SVD over `samples` rows and `cols` columns besides the bias:
+/// the design, its copy and U.
+pub fn lsq(samples: usize, cols: usize) -> f64 {
+    3.0 * 8.0 * samples as f64 * (1 + cols) as f64
 }
 
 /// Bytes in a human unit.

@@ -44,23 +44,19 @@ impl FeatureSpec {
         let mut b = ProgramBuilder::<N, F>::new();
         for s in &self.signals {
             if !s.contains('=') {
-                return Err(TrainError::Expr {
-                    expr: s.clone(),
-                    message: "a signal must be written NAME=EXPR".into(),
-                });
+                return Err(TrainError::SignalSyntax { line: s.clone() });
             }
             b.line(s).map_err(|e| expr_error(s, &e))?;
         }
         if self.features.is_empty() {
-            return Err(TrainError::Invalid(
-                "no features: give at least one --feature EXPR".into(),
-            ));
+            return Err(TrainError::NoFeatures);
         }
         for f in &self.features {
             b.feature(f).map_err(|e| expr_error(f, &e))?;
         }
-        b.finish()
-            .map_err(|e| TrainError::Invalid(format!("feature program: {e}")))
+        b.finish().map_err(|e| TrainError::Program {
+            source: crate::error::Core(e),
+        })
     }
 }
 
@@ -68,10 +64,8 @@ fn expr_error(expr: &str, e: &tcomp_core::ParseError) -> TrainError {
     let col = e.column();
     TrainError::Expr {
         expr: expr.to_string(),
-        message: format!(
-            "{e}\n    {expr}\n    {}^",
-            " ".repeat(col.saturating_sub(1))
-        ),
+        caret: " ".repeat(col.saturating_sub(1)),
+        source: crate::error::Core(*e),
     }
 }
 
@@ -120,6 +114,7 @@ pub fn compute(
             .map_err(|e| TrainError::Step {
                 at: format!("{}:{}", data.file(), data.line(i)),
                 message: describe_step_error(e, program),
+                source: crate::error::Core(e),
             })?;
         out.push(x);
     }

@@ -126,3 +126,62 @@ fn eval_z(rbf: &Rbf64, z: &[f64]) -> f64 {
     }
     acc
 }
+
+/// The `gradient` method.
+pub struct Gradient;
+
+/// The centers asked for, or the default.
+fn centers(opts: &crate::train::FitOptions) -> usize {
+    opts.centers.unwrap_or(crate::method::DEFAULT_CENTERS)
+}
+
+impl crate::method::FitMethod for Gradient {
+    fn name(&self) -> &'static str {
+        "gradient"
+    }
+
+    fn about(&self) -> &'static str {
+        "weights, centers and widths adapted by gradient descent from the mse solution"
+    }
+
+    fn centers_bound(&self) -> &'static crate::options::Bound {
+        &crate::options::CENTERS
+    }
+
+    fn check(&self, opts: &crate::train::FitOptions) -> Result<(), TrainError> {
+        crate::options::CENTERS.check_count(centers(opts), " with --method gradient")?;
+        crate::options::ITERATIONS.check_count(opts.iterations, "")?;
+        Ok(())
+    }
+
+    fn min_samples(&self, opts: &crate::train::FitOptions) -> usize {
+        2 * centers(opts) + 2
+    }
+
+    /// The `mse` starting point, and the normalised rows of the descent.
+    fn memory(&self, s: &crate::budget::Shape) -> f64 {
+        crate::mse::memory(s) + crate::budget::rows_of(s.samples, s.features)
+    }
+
+    fn fit(
+        &self,
+        set: &mut crate::method::TrainingSet,
+        opts: &crate::train::FitOptions,
+        progress: &dyn Progress,
+    ) -> Result<crate::method::MethodFit, TrainError> {
+        let rbf = fit_with_progress(
+            &set.x,
+            &set.y,
+            centers(opts),
+            opts.seed,
+            opts.iterations,
+            progress,
+        )?;
+        progress.start("measuring the fit", 0, Unit::Iterations);
+        Ok(crate::method::MethodFit {
+            rbf,
+            width: None,
+            details: crate::method::MethodDetails::default(),
+        })
+    }
+}

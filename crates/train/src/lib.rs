@@ -3,7 +3,7 @@
 //! The pipeline: [`dataset`] loads a measurement CSV with precise errors; [`features`] runs the
 //! core's feature program over it (the code the firmware runs); a method fits an RBF in f64 —
 //! [`bayes`] (default, MacKay evidence), [`mse`] (centers by k-means or [`ols`]), [`gradient`] or
-//! the [`poly3`] baseline; [`blob_io`]
+//! the [`poly3`] baseline, each an implementation of [`method::FitMethod`]; [`blob_io`]
 //! stores it as the core's blob; [`metrics`] measures it by running the decoded blob through the
 //! core's f32 `Channel`. [`train::fit`] ties it together for `tcomp fit`; [`spec`] reads the TOML spec.
 //!
@@ -20,12 +20,16 @@
 pub mod bayes;
 pub mod blob_io;
 pub mod budget;
+pub mod cubic;
 pub mod dataset;
 pub mod error;
 pub mod evidence;
 pub mod features;
+pub mod fit_options;
 pub mod gradient;
 pub mod kmeans;
+pub mod layer;
+pub mod method;
 pub mod metrics;
 pub mod mse;
 pub mod ols;
@@ -33,11 +37,12 @@ pub mod options;
 pub mod poly3;
 pub mod progress;
 pub mod rbf64;
+pub mod rows;
 pub mod spec;
 pub mod train;
 
 pub use dataset::{DataError, Dataset};
 pub use error::TrainError;
 pub use metrics::{EvalReport, Roles};
-pub use spec::Spec;
+pub use spec::{ChannelOptions, FeatureOptions, MethodOptions, RunOptions, Spec};
 pub use train::{FitOptions, FitSummary, Fitted, Method, evaluate, fit, fit_with_progress};

@@ -45,9 +45,10 @@ impl Roles {
         match (&self.reference, self.reference_value) {
             (Some(col), _) => Ok(data.column(col)?.to_vec()),
             (None, Some(v)) => Ok(vec![crate::options::REFERENCE_VALUE.check(v)?; data.len()]),
-            (None, None) => Err(TrainError::Invalid(
-                "no reference: give --reference COL or --reference-value X".into(),
-            )),
+            (None, None) => Err(TrainError::Missing {
+                what: "reference",
+                hint: "--reference COL or --reference-value X",
+            }),
         }
     }
 }

@@ -55,9 +55,11 @@ impl FromStr for CenterSelection {
         match s {
             "kmeans" => Ok(Self::Kmeans),
             "ols" => Ok(Self::Ols),
-            _ => Err(TrainError::Invalid(format!(
-                "unknown center selection `{s}` (known: kmeans, ols)"
-            ))),
+            _ => Err(TrainError::Unknown {
+                what: "center selection",
+                name: s.into(),
+                known: "kmeans, ols".into(),
+            }),
         }
     }
 }
@@ -108,6 +110,81 @@ pub fn fit_selecting(
         weights,
         bias,
     })
+}
+
+/// The memory of a fit of `mse` (and of `gradient`'s starting point): the standardised rows, the
+/// candidates' Gaussians over every row with `--select ols`, and the least-squares solve.
+pub(crate) fn memory(s: &crate::budget::Shape) -> f64 {
+    let (m, mf) = (s.samples, s.samples as f64);
+    let centers = s.centers.unwrap_or(crate::method::DEFAULT_CENTERS);
+    let select = match s.select {
+        CenterSelection::Kmeans => 0.0,
+        // Every candidate's Gaussian over every row.
+        CenterSelection::Ols => 8.0 * mf * m.min(crate::ols::MAX_CANDIDATES) as f64 + 8.0 * mf,
+    };
+    crate::budget::rows_of(m, s.features) + select + crate::budget::lsq(m, centers)
+}
+
+/// The `mse` method.
+pub struct Mse;
+
+/// The centers asked for, or the default.
+fn centers(opts: &crate::train::FitOptions) -> usize {
+    opts.centers.unwrap_or(crate::method::DEFAULT_CENTERS)
+}
+
+impl crate::method::FitMethod for Mse {
+    fn name(&self) -> &'static str {
+        "mse"
+    }
+
+    fn about(&self) -> &'static str {
+        "the seed papers' traditional RBF, centers by k-means or orthogonal least squares \
+         (--select ols), one heuristic width, least squares"
+    }
+
+    fn centers_bound(&self) -> &'static crate::options::Bound {
+        &crate::options::CENTERS
+    }
+
+    fn check(&self, opts: &crate::train::FitOptions) -> Result<(), TrainError> {
+        crate::options::CENTERS
+            .check_count(centers(opts), " with --method mse")
+            .map(|_| ())
+    }
+
+    fn min_samples(&self, opts: &crate::train::FitOptions) -> usize {
+        2 * centers(opts) + 2
+    }
+
+    fn memory(&self, s: &crate::budget::Shape) -> f64 {
+        memory(s)
+    }
+
+    fn fit(
+        &self,
+        set: &mut crate::method::TrainingSet,
+        opts: &crate::train::FitOptions,
+        _progress: &dyn crate::progress::Progress,
+    ) -> Result<crate::method::MethodFit, TrainError> {
+        let m = centers(opts);
+        let rbf = fit_selecting(&set.x, &set.y, m, opts.seed, opts.select)?;
+        if rbf.centers.len() < m {
+            set.warnings.push(format!(
+                "{} of the {m} centers asked for: every further candidate was a \
+                 combination of those chosen, or the error was used up",
+                rbf.centers.len()
+            ));
+        }
+        Ok(crate::method::MethodFit {
+            rbf,
+            width: None,
+            details: crate::method::MethodDetails {
+                select: Some(opts.select),
+                ..Default::default()
+            },
+        })
+    }
 }
 
 #[cfg(test)]

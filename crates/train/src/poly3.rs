@@ -6,15 +6,17 @@
 //! term and zero centers, so the same blob format, evaluator and firmware fly it and the comparison
 //! with the RBF methods is on equal terms.
 //!
-//! The same cubic is also a basis `bayes` may choose (`cubic_basis` builds its program and
+//! The same cubic is also a basis `bayes` may choose ([`crate::cubic`] builds its program and
 //! columns): on a tie in evidence with the Gaussians it is the simpler model.
 
 use crate::dataset::Dataset;
 use crate::error::TrainError;
-use crate::features::{self, FeatureSpec, bin_mean};
+use crate::features::{self, FeatureSpec};
+use crate::method::{FitMethod, MethodDetails, MethodFit, TrainingSet};
+use crate::progress::Progress;
 use crate::rbf64::{Rbf64, design, least_squares, mean_std, normalise_rows, split_weights};
-use tcomp_core::FeatureRange;
 use tcomp_core::expr::{self, Expr};
+use crate::train::FitOptions;
 
 /// Name of the clamped-temperature signal poly3 defines.
 pub const SIGNAL: &str = "Tclamped";
@@ -52,70 +54,85 @@ pub fn fit(x: &[Vec<f64>], y: &[f64]) -> Result<Rbf64, TrainError> {
     })
 }
 
-/// The cubic in the first feature as `bayes` may choose it: the program with `Tclamped =
-/// clamp(first feature, trained range)` and the features `sq(Tclamped)`, `Tclamped * sq(Tclamped)`
-/// appended, their two ranges, and their binned values (computed by that program, like `x`).
-pub(crate) struct CubicBasis {
-    pub(crate) spec: FeatureSpec,
-    pub(crate) ranges: [FeatureRange; 2],
-    pub(crate) rows: Vec<Vec<f64>>,
-}
+/// The `poly3` method.
+pub struct Poly3;
 
-/// The cubic basis for `spec`, or `None` when the program with it would not fit the firmware
-/// ([`features::fits_flight`]) or the first feature does not vary.
-pub(crate) fn cubic_basis(
-    spec: &FeatureSpec,
-    data: &Dataset,
-    time: &[f64],
-    starts: &[usize],
-    ranges: &[FeatureRange],
-    b: &[(usize, usize)],
-) -> Result<Option<CubicBasis>, TrainError> {
-    let (Some(expr), Some(r)) = (spec.features.first(), ranges.first()) else {
-        return Ok(None);
-    };
-    if r.hi.is_nan() || r.lo.is_nan() || r.hi <= r.lo {
-        return Ok(None);
+impl FitMethod for Poly3 {
+    fn name(&self) -> &'static str {
+        "poly3"
     }
-    let (sig, feats) = program_lines(expr, f64::from(r.lo), f64::from(r.hi));
-    let mut augmented = spec.clone();
-    augmented.signals.push(sig);
-    augmented.features.extend(feats.into_iter().skip(1));
-    if !features::fits_flight(&augmented) {
-        return Ok(None);
+
+    fn about(&self) -> &'static str {
+        "the PX4/ArduPilot cubic in the first feature, clamped to its trained range"
     }
-    let nf = spec.features.len();
-    let feats = features::compute(&augmented.program()?, data, time, starts)?;
-    let mut out = [FeatureRange { lo: 0.0, hi: 0.0 }; 2];
-    let mut cols = Vec::with_capacity(2);
-    for (k, range) in out.iter_mut().enumerate() {
-        let c: Vec<f64> = feats
-            .iter()
-            .map(|r| r.get(nf + k).copied().map_or(f64::NAN, f64::from))
-            .collect();
-        let (lo, hi) = c
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
-                (l.min(v), h.max(v))
-            });
-        *range = FeatureRange {
-            lo: lo as f32,
-            hi: hi as f32,
+
+    fn min_samples(&self, _opts: &FitOptions) -> usize {
+        8
+    }
+
+    fn features_fitted(&self, _opts: &FitOptions) -> usize {
+        1
+    }
+
+    /// The program around one clamped temperature: the first feature's range over the selected
+    /// rows, then [`program_lines`].
+    fn program(
+        &self,
+        opts: &FitOptions,
+        data: &Dataset,
+        starts: &[usize],
+        warnings: &mut Vec<String>,
+    ) -> Result<FeatureSpec, TrainError> {
+        let expr = opts.spec.features.first().ok_or(TrainError::MethodNeeds {
+            method: "poly3",
+            what: "one feature: the temperature expression",
+        })?;
+        if opts.spec.features.len() > 1 {
+            warnings.push(format!(
+                "poly3 uses only the first feature `{expr}`; the others are ignored"
+            ));
+        }
+        let probe = FeatureSpec {
+            signals: opts.spec.signals.clone(),
+            features: vec![expr.clone()],
         };
-        cols.push(bin_mean(&c, b));
-    }
-    let rows = (0..b.len())
-        .map(|i| {
-            cols.iter()
-                .map(|c| c.get(i).copied().unwrap_or(0.0))
-                .collect()
+        let time = data.time(&opts.time)?;
+        let t = features::compute(&probe.program()?, data, time, starts)?;
+        let (lo, hi) = t
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| {
+                (l.min(f64::from(r[0])), h.max(f64::from(r[0])))
+            });
+        let (sig, feats) = program_lines(expr, lo, hi);
+        let mut signals = opts.spec.signals.clone();
+        signals.push(sig);
+        Ok(FeatureSpec {
+            signals,
+            features: feats,
         })
-        .collect();
-    Ok(Some(CubicBasis {
-        spec: augmented,
-        ranges: out,
-        rows,
-    }))
+    }
+
+    fn memory(&self, s: &crate::budget::Shape) -> f64 {
+        crate::budget::lsq(s.samples, 4)
+    }
+
+    /// T, T², T³ of one temperature are collinear on purpose.
+    fn refuses_collinear(&self) -> bool {
+        false
+    }
+
+    fn fit(
+        &self,
+        set: &mut TrainingSet,
+        _opts: &FitOptions,
+        _progress: &dyn Progress,
+    ) -> Result<MethodFit, TrainError> {
+        Ok(MethodFit {
+            rbf: fit(&set.x, &set.y)?,
+            width: None,
+            details: MethodDetails::default(),
+        })
+    }
 }
 
 #[cfg(test)]

@@ -1,4 +1,6 @@
-//! The TOML fit spec: the same keys as the `tcomp fit` flags, so adding an effect is one more line.
+//! The fit options, one struct per concern, each both the command-line flags (`clap::Args`) and
+//! the keys of the TOML fit spec (`serde::Deserialize`) — so adding an effect is one more line of
+//! the file, and adding an option is one field here.
 //!
 //! ```toml
 //! time = "time_s"
@@ -10,58 +12,148 @@
 //! method = "bayes"
 //! ```
 //! Unknown keys are errors (a typo must not be silently ignored). Command-line flags override
-//! single values and add to the `feature`/`signal` lists.
+//! single values and add to the `feature`/`signal` lists ([`crate::layer`]); numbers are checked
+//! against the one table of bounds ([`crate::options`]) by clap's value parsers and again, for
+//! spec files and library callers, by [`crate::FitOptions::from_spec`].
+//!
+//! The spec is read flat (every key at the top level); each concern's struct takes its keys from
+//! the same text, so a type error is still reported at its line and column.
 
 use crate::error::TrainError;
+use crate::layer::Layer;
+use crate::options::{
+    AVERAGE, CENTERS_BAYES, FROM, GAP, ITERATIONS, REFERENCE_VALUE, UNTIL, parse_seed,
+};
 use serde::Deserialize;
 use std::path::Path;
 
-/// A fit spec; every field optional.
-#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+crate::layer! {
+    /// Which rows of a run are read and against what reference: shared by every command that
+    /// reads a run (`fit`, `eval`, `diagnose`, `compare`, `report`), and keys of the fit spec.
+    #[derive(Clone, Debug, Default, PartialEq, clap::Args, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub struct RunOptions {
+        /// Reference column: error = target − reference (when evaluating: instead of the model's).
+        #[arg(long)]
+        pub reference: Option<String>,
+        /// Constant reference in the target's unit (when fitting with no reference at all, the
+        /// training mean of the target is used).
+        #[arg(long, allow_negative_numbers = true, value_parser = REFERENCE_VALUE.parser())]
+        pub reference_value: Option<f64>,
+        /// Use only rows with time ≥ this (s).
+        #[arg(long, allow_negative_numbers = true, value_parser = FROM.parser())]
+        pub from: Option<f64>,
+        /// Use only rows with time < this (s).
+        #[arg(long, allow_negative_numbers = true, value_parser = UNTIL.parser())]
+        pub until: Option<f64>,
+        /// Steps longer than this (s) are gaps, where feature state is reset [default: 10× the
+        /// median step].
+        #[arg(long, allow_negative_numbers = true, value_parser = GAP.parser())]
+        pub gap: Option<f64>,
+    }
+}
+
+crate::layer! {
+    /// The channel a model compensates: its columns and what the blob says about it.
+    #[derive(Clone, Debug, Default, PartialEq, clap::Args, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub struct ChannelOptions {
+        /// Time column, seconds [default: time_s].
+        #[arg(long)]
+        pub time: Option<String>,
+        /// Sensor output column.
+        #[arg(long)]
+        pub target: Option<String>,
+        /// Sensor kind: rlg, qma, ifog, mems-gyro, mems-accel, other.
+        #[arg(long)]
+        pub sensor: Option<String>,
+        /// Axis label.
+        #[arg(long)]
+        pub axis: Option<String>,
+        /// Unit of the target.
+        #[arg(long)]
+        pub unit: Option<String>,
+    }
+}
+
+crate::layer! {
+    /// The feature program: named signals and the feature expressions (lists that add up).
+    #[derive(Clone, Debug, Default, PartialEq, clap::Args, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub struct FeatureOptions {
+        /// Feature expression, e.g. `rate(T)` (repeatable).
+        #[arg(long)]
+        #[serde(default)]
+        pub feature: Vec<String>,
+        /// Named signal `NAME=EXPR` (repeatable).
+        #[arg(long)]
+        #[serde(default)]
+        pub signal: Vec<String>,
+    }
+}
+
+crate::layer! {
+    /// How the model is fitted: the method and its settings.
+    #[derive(Clone, Debug, Default, PartialEq, clap::Args, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub struct MethodOptions {
+        /// The method (see the list below).
+        #[arg(long, help = crate::method::Method::help())]
+        pub method: Option<String>,
+        /// Average into non-overlapping bins of this many seconds before fitting; 0 = off
+        /// [default: 120, shortened on short runs to leave 60 bins].
+        #[arg(long, allow_negative_numbers = true, value_parser = AVERAGE.parser())]
+        pub average: Option<f64>,
+        /// Number of centers (bayes: fixed instead of chosen by evidence; mse/gradient: default 16).
+        #[arg(long, allow_negative_numbers = true, value_parser = CENTERS_BAYES.count_parser())]
+        pub centers: Option<usize>,
+        /// No linear term (bayes); spec key `linear = false`.
+        #[arg(long = "no-linear", num_args = 0, default_missing_value = "false")]
+        pub linear: Option<bool>,
+        /// Do not offer bayes the cubic in the first feature as a basis (it is chosen only when
+        /// the Gaussians do not beat it by ln 20 in log evidence); spec key `cubic = false`.
+        #[arg(long = "no-cubic", num_args = 0, default_missing_value = "false")]
+        pub cubic: Option<bool>,
+        /// Center selection of mse: kmeans (default) or ols (orthogonal least squares forward
+        /// selection).
+        #[arg(long)]
+        pub select: Option<String>,
+        /// k-means seed.
+        #[arg(long, allow_negative_numbers = true, value_parser = parse_seed)]
+        pub seed: Option<u64>,
+        /// Gradient-descent iterations.
+        #[arg(long, allow_negative_numbers = true, value_parser = ITERATIONS.count_parser())]
+        pub iterations: Option<usize>,
+    }
+}
+
+/// A fit spec: every concern's options, every field optional.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Spec {
-    /// Time column.
-    pub time: Option<String>,
-    /// Target column.
-    pub target: Option<String>,
-    /// Reference column.
-    pub reference: Option<String>,
-    /// Constant reference.
-    pub reference_value: Option<f64>,
-    /// Feature expressions.
-    #[serde(default)]
-    pub feature: Vec<String>,
-    /// Signals `NAME = EXPR`.
-    #[serde(default)]
-    pub signal: Vec<String>,
-    /// Averaging bin (s) before fitting; 0 = none.
-    pub average: Option<f64>,
-    /// Method name.
-    pub method: Option<String>,
-    /// Number of centers (fixed).
-    pub centers: Option<usize>,
-    /// Linear term on/off.
-    pub linear: Option<bool>,
-    /// Offer `bayes` the cubic basis (default true).
-    pub cubic: Option<bool>,
-    /// Center selection of `mse`: `kmeans` (default) or `ols`.
-    pub select: Option<String>,
-    /// Gap threshold (s).
-    pub gap: Option<f64>,
-    /// k-means seed.
-    pub seed: Option<u64>,
-    /// Gradient iterations.
-    pub iterations: Option<usize>,
-    /// Sensor kind name.
-    pub sensor: Option<String>,
-    /// Axis label.
-    pub axis: Option<String>,
-    /// Target unit.
-    pub unit: Option<String>,
-    /// Train only on rows with time ≥ this (s).
-    pub from: Option<f64>,
-    /// Train only on rows with time < this (s).
-    pub until: Option<f64>,
+    /// Rows and reference.
+    pub run: RunOptions,
+    /// Columns and the blob's description of the channel.
+    pub channel: ChannelOptions,
+    /// Signals and features.
+    pub features: FeatureOptions,
+    /// Method and settings.
+    pub method: MethodOptions,
+}
+
+impl Layer for Spec {
+    fn overlay(&mut self, other: Self) {
+        self.run.overlay(other.run);
+        self.channel.overlay(other.channel);
+        self.features.overlay(other.features);
+        self.method.overlay(other.method);
+    }
+
+    fn keys(out: &mut Vec<String>) {
+        RunOptions::keys(out);
+        ChannelOptions::keys(out);
+        FeatureOptions::keys(out);
+        MethodOptions::keys(out);
+    }
 }
 
 impl Spec {
@@ -71,40 +163,103 @@ impl Spec {
             file: path.display().to_string(),
             source,
         })?;
-        toml::from_str(&text).map_err(|e| TrainError::Spec {
-            file: path.display().to_string(),
-            message: e.to_string(),
+        Self::parse(&path.display().to_string(), &text)
+    }
+
+    /// Parses the text of a TOML spec; `file` names it in errors.
+    pub fn parse(file: &str, text: &str) -> Result<Self, TrainError> {
+        let spec_error = |e| TrainError::Spec {
+            file: file.to_string(),
+            source: Box::new(e),
+        };
+        let table: toml::Table = toml::from_str(text).map_err(spec_error)?;
+        let mut known = Vec::new();
+        Self::keys(&mut known);
+        if let Some(key) = table.keys().find(|k| !known.contains(k)) {
+            return Err(TrainError::UnknownSpecKey {
+                file: file.to_string(),
+                line: key_line(text, key),
+                key: key.clone(),
+                known: known.join(", "),
+            });
+        }
+        Ok(Self {
+            run: toml::from_str(text).map_err(spec_error)?,
+            channel: toml::from_str(text).map_err(spec_error)?,
+            features: toml::from_str(text).map_err(spec_error)?,
+            method: toml::from_str(text).map_err(spec_error)?,
         })
     }
 
     /// `other` laid over `self`: its single values win, its lists are appended.
     #[must_use]
     pub fn merged(mut self, other: Spec) -> Spec {
-        macro_rules! take {
-            ($($f:ident),*) => { $( if other.$f.is_some() { self.$f = other.$f; } )* };
-        }
-        take!(
-            time,
-            target,
-            reference,
-            reference_value,
-            average,
-            method,
-            centers,
-            linear,
-            cubic,
-            select,
-            gap,
-            seed,
-            iterations,
-            sensor,
-            axis,
-            unit,
-            from,
-            until
-        );
-        self.feature.extend(other.feature);
-        self.signal.extend(other.signal);
+        self.overlay(other);
         self
+    }
+}
+
+/// The 1-based line where `key` is set (0 when it cannot be found, e.g. a quoted key).
+fn key_line(text: &str, key: &str) -> usize {
+    text.lines()
+        .position(|l| {
+            l.trim_start()
+                .strip_prefix(key)
+                .is_some_and(|rest| rest.trim_start().starts_with('='))
+        })
+        .map_or(0, |i| i + 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_concern_reads_its_keys_from_one_flat_file() {
+        let s = Spec::parse(
+            "s.toml",
+            "target = \"gyro_dph\"\nreference-value = 2\nfeature = [\"T\"]\naverage = 30\n\
+             linear = false\nseed = 7\nuntil = 100.5\n",
+        );
+        let s = s.unwrap_or_default();
+        assert_eq!(s.channel.target.as_deref(), Some("gyro_dph"));
+        assert_eq!(s.run.reference_value, Some(2.0));
+        assert_eq!(s.run.until, Some(100.5));
+        assert_eq!(s.features.feature, ["T"]);
+        assert_eq!(s.method.average, Some(30.0));
+        assert_eq!(s.method.linear, Some(false));
+        assert_eq!(s.method.seed, Some(7));
+    }
+
+    #[test]
+    fn an_unknown_key_is_named_with_its_line_and_a_type_error_with_its_column() {
+        let e = Spec::parse("s.toml", "target = \"x\"\n\nfeatuer = [\"T\"]\n")
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains("s.toml") && e.contains("line 3") && e.contains("unknown field `featuer`"),
+            "{e}"
+        );
+        let e = Spec::parse("s.toml", "average = \"long\"\n")
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("s.toml") && e.contains("line 1"), "{e}");
+    }
+
+    #[test]
+    fn flags_override_single_values_and_add_to_lists() {
+        let mut file = Spec::default();
+        file.method.average = Some(30.0);
+        file.features.feature = vec!["T".into()];
+        file.run.from = Some(5.0);
+        let mut flags = Spec::default();
+        flags.method.average = Some(60.0);
+        flags.features.feature = vec!["rate(T)".into()];
+        let m = file.merged(flags);
+        assert_eq!(m.method.average, Some(60.0));
+        assert_eq!(m.run.from, Some(5.0));
+        assert_eq!(m.features.feature, ["T", "rate(T)"]);
     }
 }

@@ -19,12 +19,18 @@ fn data(rows: usize) -> Dataset {
 }
 
 fn spec() -> Spec {
-    Spec {
-        target: Some("gyro_dph".into()),
-        reference: Some("ref_dph".into()),
-        feature: vec!["t_coil_c".into()],
-        ..Spec::default()
-    }
+    let mut s = Spec::default();
+    s.channel.target = Some("gyro_dph".into());
+    s.run.reference = Some("ref_dph".into());
+    s.features.feature = vec!["t_coil_c".into()];
+    s
+}
+
+/// [`spec`] changed by `f`.
+fn with(f: impl FnOnce(&mut Spec)) -> Spec {
+    let mut s = spec();
+    f(&mut s);
+    s
 }
 
 fn refused(s: Spec, named: &[&str]) {
@@ -38,76 +44,67 @@ fn refused(s: Spec, named: &[&str]) {
 fn nan_inf_zero_negative_and_huge_values_are_refused_by_name() {
     for a in [f64::NAN, f64::INFINITY, -1.0, 1e300] {
         refused(
-            Spec {
-                average: Some(a),
-                ..spec()
-            },
+            with(|s| {
+                s.method.average = Some(a);
+            }),
             &["--average", "spec key `average`", "between 0 and"],
         );
     }
     for v in [f64::NAN, f64::INFINITY, -1e300] {
         refused(
-            Spec {
-                reference_value: Some(v),
-                ..spec()
-            },
+            with(|s| {
+                s.run.reference_value = Some(v);
+            }),
             &["--reference-value", "reference-value"],
         );
     }
     for m in ["mse", "gradient"] {
         refused(
-            Spec {
-                centers: Some(0),
-                method: Some(m.into()),
-                ..spec()
-            },
+            with(|s| {
+                s.method.centers = Some(0);
+                s.method.method = Some(m.into());
+            }),
             &["--centers 0", "centers", &format!("--method {m}")],
         );
     }
     refused(
-        Spec {
-            centers: Some(1000),
-            ..spec()
-        },
+        with(|s| {
+            s.method.centers = Some(1000);
+        }),
         &["--centers 1000", "64"],
     );
     refused(
-        Spec {
-            iterations: Some(0),
-            ..spec()
-        },
+        with(|s| {
+            s.method.iterations = Some(0);
+        }),
         &["--iterations 0"],
     );
     for g in [0.0, -5.0, f64::NAN] {
         refused(
-            Spec {
-                gap: Some(g),
-                ..spec()
-            },
+            with(|s| {
+                s.run.gap = Some(g);
+            }),
             &["--gap"],
         );
     }
     refused(
-        Spec {
-            from: Some(f64::NAN),
-            ..spec()
-        },
+        with(|s| {
+            s.run.from = Some(f64::NAN);
+        }),
         &["--from NaN", "spec key `from`"],
     );
     refused(
-        Spec {
-            from: Some(100.0),
-            until: Some(50.0),
-            ..spec()
-        },
+        with(|s| {
+            s.run.from = Some(100.0);
+            s.run.until = Some(50.0);
+        }),
         &["--from 100", "--until 50", "empty window"],
     );
     // Bayes with no centers is its linear part alone: valid.
     assert!(
-        FitOptions::from_spec(&Spec {
-            centers: Some(0),
-            ..spec()
-        })
+        FitOptions::from_spec(&with(|s| {
+            s.method.centers = Some(0);
+        }))
         .is_ok()
     );
 }
@@ -115,10 +112,10 @@ fn nan_inf_zero_negative_and_huge_values_are_refused_by_name() {
 #[test]
 fn an_averaging_bin_shorter_than_the_sampling_step_is_refused() {
     let d = data(3000);
-    let opts = FitOptions::from_spec(&Spec {
-        average: Some(1e-300),
-        ..spec()
-    })
+    // Within the table's range (at least 1 ms) but shorter than this run's 1 s step.
+    let opts = FitOptions::from_spec(&with(|s| {
+        s.method.average = Some(0.5);
+    }))
     .unwrap();
     let e = fit(&d, &opts).unwrap_err().to_string();
     assert!(
@@ -153,12 +150,11 @@ fn the_evaluators_bin_must_hold_samples_and_leave_two_bins() {
 #[test]
 fn a_fit_over_the_memory_budget_is_refused_with_an_averaging_suggestion() {
     let d = data(3000);
-    let mut opts = FitOptions::from_spec(&Spec {
-        average: Some(0.0),
-        method: Some("mse".into()),
-        select: Some("ols".into()),
-        ..spec()
-    })
+    let mut opts = FitOptions::from_spec(&with(|s| {
+        s.method.average = Some(0.0);
+        s.method.method = Some("mse".into());
+        s.method.select = Some("ols".into());
+    }))
     .unwrap();
     opts.memory_budget = 4_000_000;
     let e = fit(&d, &opts).unwrap_err().to_string();
@@ -194,12 +190,11 @@ impl Progress for Recorder {
 #[test]
 fn gradient_descent_reports_its_iterations() {
     let d = data(3000);
-    let opts = FitOptions::from_spec(&Spec {
-        method: Some("gradient".into()),
-        iterations: Some(25),
-        centers: Some(4),
-        ..spec()
-    })
+    let opts = FitOptions::from_spec(&with(|s| {
+        s.method.method = Some("gradient".into());
+        s.method.iterations = Some(25);
+        s.method.centers = Some(4);
+    }))
     .unwrap();
     let rec = Recorder::default();
     fit_with_progress(&d, &opts, &rec).unwrap();

@@ -114,12 +114,12 @@ fn mems_cycle_cubic_models_fit_the_firmware() {
         let mut o = FitOptions::new(ch, &["temp_imu_C"]);
         o.until = Some(3130.0);
         let f = fit(&d, &o).unwrap();
-        let s = &f.summary;
+        let s = &f.summary.details;
         let other = s.other_basis_log_evidence.expect("the cubic was offered");
         let ev = s.evidence.as_ref().unwrap().log_evidence;
         if s.basis == Some(tcomp_train::bayes::Basis::Cubic) {
             cubic += 1;
-            assert_eq!(s.centers, 0, "{ch}");
+            assert_eq!(f.summary.centers, 0, "{ch}");
             assert_eq!(f.model.spec.features.len(), 3, "{ch}");
             assert!(ev >= other - tcomp_train::bayes::PARSIMONY, "{ch}");
         } else {
@@ -138,8 +138,11 @@ fn mems_cycle_cubic_models_fit_the_firmware() {
     o.until = Some(3130.0);
     o.cubic = false;
     let f = fit(&d, &o).unwrap();
-    assert_eq!(f.summary.basis, Some(tcomp_train::bayes::Basis::Gaussians));
-    assert_eq!(f.summary.other_basis_log_evidence, None);
+    assert_eq!(
+        f.summary.details.basis,
+        Some(tcomp_train::bayes::Basis::Gaussians)
+    );
+    assert_eq!(f.summary.details.other_basis_log_evidence, None);
     assert_eq!(f.model.spec.features, vec!["temp_imu_C".to_string()]);
 }
 

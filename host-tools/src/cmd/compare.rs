@@ -1,9 +1,10 @@
 //! `tcomp compare MODEL_A MODEL_B --data FILE [--json]`: before/after, overall and per segment.
+use super::run::RunArgs;
 use clap::Args as ClapArgs;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use tcomp_train::metrics::{self, Run};
-use tcomp_train::{Dataset, EvalReport, Roles};
+use tcomp_train::{Dataset, EvalReport};
 
 /// Arguments of `tcomp compare`.
 #[derive(ClapArgs, Debug)]
@@ -13,8 +14,8 @@ pub struct Args {
     /// The second model ("after").
     pub model_b: PathBuf,
     /// The run to compare on.
-    #[arg(long)]
-    pub data: PathBuf,
+    #[command(flatten)]
+    pub run: RunArgs,
     /// Bin length (s) of the binned figures.
     #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub bin: f64,
@@ -45,35 +46,44 @@ struct Comparison {
     segments: Vec<SegmentPair>,
 }
 
-/// Runs a blob over `data` with the segment temperature `temp`.
-pub fn run_blob(path: &Path, data: &Dataset, temp: Option<&str>) -> anyhow::Result<Run> {
+/// Runs a blob over `data` with the segment temperature `temp`, the reference override and the
+/// gap threshold of `run`.
+pub fn run_blob(
+    path: &Path,
+    data: &Dataset,
+    temp: Option<&str>,
+    run: &RunArgs,
+) -> anyhow::Result<Run> {
     let bytes = tcomp_train::blob_io::read(path)?;
     let model = tcomp_train::blob_io::decode(path, &bytes)?;
     Ok(metrics::run_model(
         &model,
         data,
-        &Roles::of_model(&model),
+        &run.roles(&model),
         temp,
-        None,
+        run.run.gap,
     )?)
 }
 
-fn first_input(path: &Path) -> anyhow::Result<Option<String>> {
+/// A blob's time column and first input (the default segment temperature).
+pub fn time_and_first_input(path: &Path) -> anyhow::Result<(String, Option<String>)> {
     let bytes = tcomp_train::blob_io::read(path)?;
     let model = tcomp_train::blob_io::decode(path, &bytes)?;
-    Ok(model.program.inputs.first().map(|s| s.to_string()))
+    Ok((
+        model.meta.columns.time.to_string(),
+        model.program.inputs.first().map(|s| s.to_string()),
+    ))
 }
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.bin > 0.0, "--bin must be positive");
-    let data = Dataset::load(&args.data)?;
-    let temp = match &args.temperature {
-        Some(t) => Some(t.clone()),
-        None => first_input(&args.model_a)?,
-    };
-    let ra = run_blob(&args.model_a, &data, temp.as_deref())?;
-    let rb = run_blob(&args.model_b, &data, temp.as_deref())?;
+    args.run.check_window()?;
+    let (time, first) = time_and_first_input(&args.model_a)?;
+    let data = args.run.load(&time)?;
+    let temp = args.temperature.clone().or(first);
+    let ra = run_blob(&args.model_a, &data, temp.as_deref(), &args.run)?;
+    let rb = run_blob(&args.model_b, &data, temp.as_deref(), &args.run)?;
     let (a, b) = (
         metrics::report(&ra, args.bin),
         metrics::report(&rb, args.bin),

@@ -1,5 +1,6 @@
 //! `tcomp diagnose --model MODEL --data FILE [--verify FILE] [--json]`: where the model fails and
 //! which physical effect is most likely missing, with the evidence and a stated criterion.
+use super::run::RunArgs;
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
 use tcomp_discover::{Analysis, DiagnoseOptions};
@@ -12,14 +13,11 @@ pub struct Args {
     #[arg(long)]
     pub model: PathBuf,
     /// The run to diagnose (normally the training run), CSV or .csv.gz.
-    #[arg(long)]
-    pub data: PathBuf,
+    #[command(flatten)]
+    pub run: RunArgs,
     /// A held-out run (else contiguous blocks of --data are held out in turn).
     #[arg(long)]
     pub verify: Option<PathBuf>,
-    /// Override the model's reference with a constant.
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::reference_value)]
-    pub reference_value: Option<f64>,
     /// Column for segment detection [default: the program's first input].
     #[arg(long)]
     pub temperature: Option<String>,
@@ -40,25 +38,21 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Runs the diagnosis (shared with `report`).
+/// Runs the diagnosis (shared with `report`) on the rows of `--from/--until`.
 pub fn analyse(args: &Args) -> anyhow::Result<(Analysis, Dataset)> {
-    anyhow::ensure!(
-        args.bin.is_finite() && args.bin > 0.0,
-        "--bin must be a positive number of seconds"
-    );
+    args.run.check_window()?;
     let bytes = tcomp_train::blob_io::read(&args.model)?;
     let model = tcomp_train::blob_io::decode(&args.model, &bytes)?;
-    let data = Dataset::load(&args.data)?;
+    let roles = args.run.roles(&model);
+    let data = args.run.load(&roles.time)?;
     let verify = args.verify.as_deref().map(Dataset::load).transpose()?;
     let mut opts = DiagnoseOptions::default();
     opts.score.bin_s = args.bin;
+    opts.score.gap_s = args.run.run.gap;
     opts.criterion.min_delta_log_evidence = args.min_evidence;
     opts.criterion.min_improvement_pct = args.min_improvement;
     opts.temperature.clone_from(&args.temperature);
-    if let Some(v) = args.reference_value {
-        let mut roles = tcomp_train::Roles::of_model(&model);
-        roles.reference = None;
-        roles.reference_value = Some(v);
+    if args.run.overrides_reference() {
         opts.roles = Some(roles);
     }
     let a = tcomp_discover::diagnose(&model, &data, verify.as_ref(), &opts)?;

@@ -1,7 +1,8 @@
 //! `tcomp eval --model MODEL --data FILE`: measure a blob on a run, through the core's f32 evaluator.
+use super::run::RunArgs;
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
-use tcomp_train::{Dataset, EvalReport, Roles};
+use tcomp_train::EvalReport;
 
 /// Arguments of `tcomp eval`.
 #[derive(ClapArgs, Debug)]
@@ -9,30 +10,15 @@ pub struct Args {
     /// The model blob.
     #[arg(long)]
     pub model: PathBuf,
-    /// Measurement CSV (or .csv.gz).
-    #[arg(long)]
-    pub data: PathBuf,
+    /// The run to evaluate on.
+    #[command(flatten)]
+    pub run: RunArgs,
     /// Bin length (s) of the binned figures.
     #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
     pub bin: f64,
-    /// Override the model's reference column.
-    #[arg(long)]
-    pub reference: Option<String>,
-    /// Override the model's reference with a constant.
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::reference_value)]
-    pub reference_value: Option<f64>,
     /// Column for segment detection [default: the program's first input].
     #[arg(long)]
     pub temperature: Option<String>,
-    /// Evaluate only rows with time ≥ this (s).
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
-    pub from: Option<f64>,
-    /// Evaluate only rows with time < this (s).
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
-    pub until: Option<f64>,
-    /// Steps longer than this (s) are gaps [default: 10× the median step].
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::interval_s)]
-    pub gap: Option<f64>,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -43,48 +29,12 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        args.bin.is_finite() && args.bin > 0.0,
-        "--bin must be a positive number of seconds"
-    );
-    if let (Some(from), Some(until)) = (args.from, args.until) {
-        anyhow::ensure!(
-            from < until,
-            "--from {from} must be less than --until {until} (rows with from ≤ time < until are evaluated)"
-        );
-    }
+    args.run.check_window()?;
     let bytes = tcomp_train::blob_io::read(&args.model)?;
     let model = tcomp_train::blob_io::decode(&args.model, &bytes)?;
-    let mut roles = Roles::of_model(&model);
-    if let Some(r) = &args.reference {
-        roles.reference = Some(r.clone());
-    }
-    if let Some(v) = args.reference_value {
-        roles.reference = None;
-        roles.reference_value = Some(v);
-    }
+    let roles = args.run.roles(&model);
     let progress = super::progress::spinner(args.quiet, "loading data");
-    let mut data = Dataset::load(&args.data)?;
-    if args.from.is_some() || args.until.is_some() {
-        data = data.select_time(
-            &roles.time,
-            args.from.unwrap_or(f64::NEG_INFINITY),
-            args.until.unwrap_or(f64::INFINITY),
-        )?;
-    }
-    // One row has no spread: every figure would be a meaningless zero.
-    if data.len() < 2 {
-        let which = if args.from.is_some() || args.until.is_some() {
-            "--from/--until select"
-        } else {
-            "the file has"
-        };
-        anyhow::bail!(
-            "{}: {which} {} row(s), and at least 2 are needed to measure anything",
-            args.data.display(),
-            data.len()
-        );
-    }
+    let data = args.run.load(&roles.time)?;
     progress.set_message("evaluating");
     let report = tcomp_train::evaluate(
         &model,
@@ -92,7 +42,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         &roles,
         args.bin,
         args.temperature.as_deref(),
-        args.gap,
+        args.run.run.gap,
     )?;
     progress.finish_and_clear();
     if args.json {

@@ -1,84 +1,36 @@
 //! `tcomp fit --data FILE ... --out MODEL`: train a model and write its blob atomically.
+use super::run::RunArgs;
 use anyhow::Context;
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
 use tcomp_train::bayes::Basis;
 use tcomp_train::mse::CenterSelection;
-use tcomp_train::{Dataset, FitOptions, FitSummary, Spec};
+use tcomp_train::{
+    ChannelOptions, Dataset, FeatureOptions, FitOptions, FitSummary, MethodOptions, Spec,
+};
 
-/// Arguments of `tcomp fit`.
+/// Arguments of `tcomp fit`: the run, and one flattened struct per concern of the trainer's
+/// options (the same structs the spec file is read into, so a flag and its spec key are one field).
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Measurement CSV (or .csv.gz).
-    #[arg(long)]
-    pub data: PathBuf,
+    /// The run to fit on.
+    #[command(flatten)]
+    pub run: RunArgs,
     /// Where to write the model blob (.tcm).
     #[arg(long)]
     pub out: PathBuf,
     /// TOML spec with the same keys as these flags (flags override; features and signals add up).
     #[arg(long)]
     pub spec: Option<PathBuf>,
-    /// Time column, seconds [default: time_s].
-    #[arg(long)]
-    pub time: Option<String>,
-    /// Sensor output column.
-    #[arg(long)]
-    pub target: Option<String>,
-    /// Reference column (error = target − reference).
-    #[arg(long)]
-    pub reference: Option<String>,
-    /// Constant reference; with no reference at all the training mean of the target is used.
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::reference_value)]
-    pub reference_value: Option<f64>,
-    /// Feature expression, e.g. `rate(T)` (repeatable).
-    #[arg(long = "feature")]
-    pub features: Vec<String>,
-    /// Named signal `NAME=EXPR` (repeatable).
-    #[arg(long = "signal")]
-    pub signals: Vec<String>,
-    /// Method: bayes (default), mse, gradient, poly3.
-    #[arg(long)]
-    pub method: Option<String>,
-    /// Average into non-overlapping bins of this many seconds before fitting; 0 = off [default: 120, shortened on short runs to leave 60 bins].
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::average_s)]
-    pub average: Option<f64>,
-    /// Number of centers (bayes: fixed instead of chosen by evidence; mse/gradient: default 16).
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::centers)]
-    pub centers: Option<usize>,
-    /// No linear term (bayes).
-    #[arg(long)]
-    pub no_linear: bool,
-    /// Do not offer bayes the cubic in the first feature as a basis (it is chosen only when the
-    /// Gaussians do not beat it by ln 20 in log evidence).
-    #[arg(long)]
-    pub no_cubic: bool,
-    /// Center selection of mse: kmeans (default) or ols (orthogonal least squares forward selection).
-    #[arg(long)]
-    pub select: Option<String>,
-    /// Steps longer than this (s) are gaps [default: 10× the median step].
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::interval_s)]
-    pub gap: Option<f64>,
-    /// k-means seed.
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::seed)]
-    pub seed: Option<u64>,
-    /// Gradient-descent iterations.
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::iterations)]
-    pub iterations: Option<usize>,
-    /// Sensor kind: rlg, qma, ifog, mems-gyro, mems-accel, other.
-    #[arg(long)]
-    pub sensor: Option<String>,
-    /// Axis label.
-    #[arg(long)]
-    pub axis: Option<String>,
-    /// Unit of the target.
-    #[arg(long)]
-    pub unit: Option<String>,
-    /// Train only on rows with time ≥ this (s).
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
-    pub from: Option<f64>,
-    /// Train only on rows with time < this (s).
-    #[arg(long, allow_negative_numbers = true, value_parser = super::check::time_s)]
-    pub until: Option<f64>,
+    /// Columns and the blob's description of the channel.
+    #[command(flatten)]
+    pub channel: ChannelOptions,
+    /// Signals and features.
+    #[command(flatten)]
+    pub features: FeatureOptions,
+    /// Method and settings.
+    #[command(flatten)]
+    pub method: MethodOptions,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
@@ -89,8 +41,9 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    let data_path = args.run.data.as_path();
     super::output::check_file_output("--out", &args.out)?;
-    let mut inputs = vec![("--data", args.data.as_path())];
+    let mut inputs = vec![("--data", data_path)];
     if let Some(spec) = &args.spec {
         inputs.push(("--spec", spec.as_path()));
     }
@@ -100,30 +53,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         None => Spec::default(),
     };
     let flags = Spec {
-        time: args.time.clone(),
-        target: args.target.clone(),
-        reference: args.reference.clone(),
-        reference_value: args.reference_value,
-        feature: args.features.clone(),
-        signal: args.signals.clone(),
-        average: args.average,
+        run: args.run.run.clone(),
+        channel: args.channel.clone(),
+        features: args.features.clone(),
         method: args.method.clone(),
-        centers: args.centers,
-        linear: args.no_linear.then_some(false),
-        cubic: args.no_cubic.then_some(false),
-        select: args.select.clone(),
-        gap: args.gap,
-        seed: args.seed,
-        iterations: args.iterations,
-        sensor: args.sensor.clone(),
-        axis: args.axis.clone(),
-        unit: args.unit.clone(),
-        from: args.from,
-        until: args.until,
     };
     let opts = FitOptions::from_spec(&file_spec.merged(flags))?;
     let progress = super::progress::Bar::new(args.quiet);
-    let data = Dataset::load_with_progress(&args.data, &progress)?;
+    let data = Dataset::load_with_progress(data_path, &progress)?;
     let fitted = tcomp_train::fit_with_progress(&data, &opts, &progress)?;
     let bytes = fitted.model.to_bytes()?;
     tcomp_train::blob_io::write_atomic(&args.out, &bytes)
@@ -142,12 +79,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 }
 
 fn print_summary(s: &FitSummary, out: &std::path::Path) {
+    let d = &s.details;
     outln!("method      {}", s.method);
     for sig in &s.signals {
         outln!("signal      {sig}");
     }
     for (i, f) in s.features.iter().enumerate() {
         let ls = s
+            .details
             .length_scales
             .get(i)
             .map(|l| format!("  length scale {l:.3}"))
@@ -159,13 +98,13 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
             .unwrap_or_default();
         outln!("feature     {f}{ls}{lin}");
     }
-    let by = match s.select {
+    let by = match d.select {
         Some(CenterSelection::Kmeans) => ", placed by k-means",
         Some(CenterSelection::Ols) => ", chosen by orthogonal least squares",
         None => "",
     };
     outln!("centers     {} (width σ = {:.3}{by})", s.centers, s.width);
-    match (s.basis, s.other_basis_log_evidence) {
+    match (d.basis, d.other_basis_log_evidence) {
         (Some(Basis::Cubic), Some(other)) => outln!(
             "basis       cubic in the first feature (chosen by evidence; the best Gaussian model's log evidence is {other:.2})"
         ),
@@ -174,7 +113,7 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
         ),
         _ => {}
     }
-    if let Some(e) = &s.evidence {
+    if let Some(e) = &d.evidence {
         outln!(
             "evidence    α = {:.4e}  α_linear = {:.4e}  β = {:.4e}  γ = {:.2}  log evidence = {:.2}  ({} settings compared, {} iterations)",
             e.alpha,
@@ -182,7 +121,7 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
             e.beta,
             e.gamma,
             e.log_evidence,
-            s.settings_evaluated,
+            d.settings_evaluated,
             e.iterations
         );
     }
@@ -206,4 +145,54 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
         t.binned.residual_std
     );
     outln!("wrote       {} ({} bytes)", out.display(), s.blob_bytes);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tcomp_train::layer::Layer;
+
+    /// The spec keys and the flags are the same fields: every key is a flag of `fit` (`--KEY`, or
+    /// `--no-KEY` for a switch that turns a default on off).
+    #[test]
+    fn every_spec_key_is_a_flag() {
+        let cmd = <Args as clap::Args>::augment_args(clap::Command::new("fit"));
+        let longs: Vec<String> = cmd
+            .get_arguments()
+            .filter_map(|a| a.get_long().map(str::to_string))
+            .collect();
+        let mut keys = Vec::new();
+        Spec::keys(&mut keys);
+        assert!(keys.len() >= 20, "{keys:?}");
+        for k in keys {
+            assert!(
+                longs.contains(&k) || longs.contains(&format!("no-{k}")),
+                "spec key `{k}` has no flag among {longs:?}"
+            );
+        }
+    }
+
+    /// An absent switch leaves the spec file's value; a given one overrides it.
+    #[test]
+    fn switches_are_unset_unless_given() {
+        let cmd = <Args as clap::Args>::augment_args(clap::Command::new("fit"));
+        let parse = |extra: &[&str]| {
+            let mut argv = vec!["fit", "--data", "d.csv", "--out", "m.tcm"];
+            argv.extend_from_slice(extra);
+            let m = cmd.clone().try_get_matches_from(argv).ok()?;
+            <Args as clap::FromArgMatches>::from_arg_matches(&m).ok()
+        };
+        let plain = parse(&[]).map(|a| (a.method.linear, a.method.cubic));
+        assert_eq!(plain, Some((None, None)));
+        let off = parse(&["--no-linear", "--no-cubic"]).map(|a| (a.method.linear, a.method.cubic));
+        assert_eq!(off, Some((Some(false), Some(false))));
+        let mut file = Spec::default();
+        file.method.linear = Some(false);
+        let flags = parse(&[]).map(|a| Spec {
+            method: a.method,
+            ..Spec::default()
+        });
+        let merged = file.merged(flags.unwrap_or_default());
+        assert_eq!(merged.method.linear, Some(false));
+    }
 }

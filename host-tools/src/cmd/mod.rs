@@ -30,5 +30,6 @@ mod output;
 mod printable;
 mod progress;
 pub mod report;
+mod run;
 pub mod simulate;
 pub mod stdout;

@@ -1,9 +1,9 @@
 //! `tcomp report --model MODEL [--model MODEL2 ...] --data FILE --out report.html`: one
 //! self-contained HTML file with SVG plots, the diagnosis of the first model, and the figures.
+use super::run::RunArgs;
 use crate::render::html::{ModelRun, ReportInput, render};
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
-use tcomp_train::Dataset;
 
 /// Arguments of `tcomp report`.
 #[derive(ClapArgs, Debug)]
@@ -12,8 +12,8 @@ pub struct Args {
     #[arg(long, required = true)]
     pub model: Vec<PathBuf>,
     /// The run to show.
-    #[arg(long)]
-    pub data: PathBuf,
+    #[command(flatten)]
+    pub run: RunArgs,
     /// A held-out run for the diagnosis.
     #[arg(long)]
     pub verify: Option<PathBuf>,
@@ -28,7 +28,8 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     super::output::check_file_output("--out", &args.out)?;
-    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", args.data.as_path())];
+    let data_path = args.run.data.as_path();
+    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", data_path)];
     inputs.extend(args.model.iter().map(|m| ("--model", m.as_path())));
     if let Some(v) = &args.verify {
         inputs.push(("--verify", v.as_path()));
@@ -38,18 +39,18 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .model
         .first()
         .ok_or_else(|| anyhow::anyhow!("give at least one --model"))?;
-    let data = Dataset::load(&args.data)?;
+    args.run.check_window()?;
     let bytes = tcomp_train::blob_io::read(first)?;
     let m0 = tcomp_train::blob_io::decode(first, &bytes)?;
     let temp = m0.program.inputs.first().map(|s| s.to_string());
+    let data = args.run.load(m0.meta.columns.time)?;
     let analysis = if args.no_diagnosis {
         None
     } else {
         let d = super::diagnose::Args {
             model: first.clone(),
-            data: args.data.clone(),
+            run: args.run.clone(),
             verify: args.verify.clone(),
-            reference_value: None,
             temperature: temp.clone(),
             bin: 60.0,
             min_evidence: 5.0,
@@ -65,12 +66,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             name: p
                 .file_name()
                 .map_or_else(|| p.display().to_string(), |f| f.to_string_lossy().into()),
-            run: super::compare::run_blob(p, &data, temp.as_deref())?,
+            run: super::compare::run_blob(p, &data, temp.as_deref(), &args.run)?,
         });
     }
     let html = render(&ReportInput {
-        title: format!("tcomp report: {}", args.data.display()),
-        data_name: args.data.display().to_string(),
+        title: format!("tcomp report: {}", data_path.display()),
+        data_name: data_path.display().to_string(),
         unit: m0.meta.unit.to_string(),
         models,
         analysis: analysis.as_ref(),

@@ -1,0 +1,203 @@
+//! The resolved fit options: what [`crate::train::fit`] is given, with every number range-checked.
+//!
+//! Why apart from the trainer: the options are resolved once (from the spec file and the flags, or
+//! built in code by a library caller) and checked against the one table of bounds
+//! ([`crate::options`]); the trainer then only reads them.
+
+use crate::error::TrainError;
+use crate::features::FeatureSpec;
+use crate::method::Method;
+use crate::mse::CenterSelection;
+use crate::options;
+use crate::spec::{ChannelOptions, MethodOptions, RunOptions, Spec};
+use tcomp_core::SensorKind;
+
+/// Parses a sensor kind name (rlg, qma, ifog, mems-gyro, mems-accel, other).
+pub fn parse_sensor(s: &str) -> Result<SensorKind, TrainError> {
+    Ok(match s {
+        "rlg" => SensorKind::Rlg,
+        "qma" => SensorKind::Qma,
+        "ifog" => SensorKind::Ifog,
+        "mems-gyro" => SensorKind::MemsGyro,
+        "mems-accel" => SensorKind::MemsAccel,
+        "other" => SensorKind::Other,
+        _ => {
+            return Err(TrainError::Unknown {
+                what: "sensor",
+                name: s.into(),
+                known: "rlg, qma, ifog, mems-gyro, mems-accel, other".into(),
+            });
+        }
+    })
+}
+
+/// Resolved fit options.
+#[derive(Clone, Debug)]
+pub struct FitOptions {
+    /// Time column.
+    pub time: String,
+    /// Target column.
+    pub target: String,
+    /// Reference column.
+    pub reference: Option<String>,
+    /// Constant reference; with neither, the training mean of the target is used (and stored).
+    pub reference_value: Option<f64>,
+    /// Signals and features.
+    pub spec: FeatureSpec,
+    /// Method.
+    pub method: Method,
+    /// Averaging bin (s), 0 for none; `None`: [`DEFAULT_AVERAGE_S`], shortened on short runs to
+    /// leave [`MIN_DEFAULT_BINS`] bins.
+    pub average_s: Option<f64>,
+    /// Fixed number of centers.
+    pub centers: Option<usize>,
+    /// Linear term (bayes).
+    pub linear: bool,
+    /// Offer `bayes` the cubic in the first feature as a basis (chosen only by evidence).
+    pub cubic: bool,
+    /// How `mse` places its centers.
+    pub select: CenterSelection,
+    /// Gap threshold (s); default 10× the median step.
+    pub gap_s: Option<f64>,
+    /// k-means seed.
+    pub seed: u64,
+    /// Gradient iterations.
+    pub iterations: usize,
+    /// Sensor kind.
+    pub sensor: SensorKind,
+    /// Axis label.
+    pub axis: String,
+    /// Target unit.
+    pub unit: String,
+    /// Train on time ≥ this.
+    pub from: Option<f64>,
+    /// Train on time < this.
+    pub until: Option<f64>,
+    /// The most memory the fit may take (bytes, estimated before allocating; see [`crate::budget`]).
+    pub memory_budget: u64,
+}
+
+impl FitOptions {
+    /// Options with defaults for the given target and features.
+    pub fn new(target: &str, features: &[&str]) -> Self {
+        Self {
+            time: "time_s".into(),
+            target: target.into(),
+            reference: None,
+            reference_value: None,
+            spec: FeatureSpec {
+                signals: Vec::new(),
+                features: features.iter().map(|s| s.to_string()).collect(),
+            },
+            method: Method::Bayes,
+            average_s: None,
+            centers: None,
+            linear: true,
+            cubic: true,
+            select: CenterSelection::Kmeans,
+            gap_s: None,
+            seed: 1,
+            iterations: 2000,
+            sensor: SensorKind::Other,
+            axis: String::new(),
+            unit: String::new(),
+            from: None,
+            until: None,
+            memory_budget: crate::budget::DEFAULT_BUDGET_BYTES,
+        }
+    }
+
+    /// Options from a spec (file and flags merged). Every number is range-checked here, with a
+    /// message naming both the flag and the spec key (see [`crate::options`] for the bounds).
+    pub fn from_spec(spec: &Spec) -> Result<Self, TrainError> {
+        let target = spec.channel.target.clone().ok_or(TrainError::Missing {
+            what: "target",
+            hint: "--target COL",
+        })?;
+        let mut o = Self::new(&target, &[]);
+        o.spec = FeatureSpec {
+            signals: spec.features.signal.clone(),
+            features: spec.features.feature.clone(),
+        };
+        o.set_run(&spec.run)?;
+        o.set_method(&spec.method)?;
+        o.set_channel(&spec.channel)?;
+        Ok(o)
+    }
+
+    /// The reference, the window and the gap threshold.
+    fn set_run(&mut self, run: &RunOptions) -> Result<(), TrainError> {
+        self.reference.clone_from(&run.reference);
+        if let Some(v) = run.reference_value {
+            self.reference_value = Some(options::REFERENCE_VALUE.check(v)?);
+        }
+        if let Some(g) = run.gap {
+            self.gap_s = Some(options::GAP.check(g)?);
+        }
+        if let Some(f) = run.from {
+            self.from = Some(options::FROM.check(f)?);
+        }
+        if let Some(u) = run.until {
+            self.until = Some(options::UNTIL.check(u)?);
+        }
+        if let (Some(f), Some(u)) = (self.from, self.until)
+            && f >= u
+        {
+            return Err(TrainError::EmptyWindow {
+                from: options::num(f),
+                until: options::num(u),
+            });
+        }
+        Ok(())
+    }
+
+    /// The method and its settings (`--centers` is checked against the method's own bound).
+    fn set_method(&mut self, m: &MethodOptions) -> Result<(), TrainError> {
+        if let Some(name) = &m.method {
+            self.method = name.parse()?;
+        }
+        if let Some(a) = m.average {
+            self.average_s = Some(options::AVERAGE.check(a)?);
+        }
+        if let Some(c) = m.centers {
+            self.method
+                .fitter()
+                .centers_bound()
+                .check_count(c, &format!(" with --method {}", self.method))?;
+        }
+        self.centers = m.centers;
+        if let Some(l) = m.linear {
+            self.linear = l;
+        }
+        if let Some(c) = m.cubic {
+            self.cubic = c;
+        }
+        if let Some(s) = &m.select {
+            self.select = s.parse()?;
+        }
+        if let Some(s) = m.seed {
+            self.seed = s;
+        }
+        if let Some(i) = m.iterations {
+            self.iterations = options::ITERATIONS.check_count(i, "")?;
+        }
+        Ok(())
+    }
+
+    /// The columns and the blob's description of the channel (the target is read first).
+    fn set_channel(&mut self, c: &ChannelOptions) -> Result<(), TrainError> {
+        if let Some(t) = &c.time {
+            self.time.clone_from(t);
+        }
+        if let Some(s) = &c.sensor {
+            self.sensor = parse_sensor(s)?;
+        }
+        if let Some(a) = &c.axis {
+            self.axis.clone_from(a);
+        }
+        if let Some(u) = &c.unit {
+            self.unit.clone_from(u);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,93 @@
+//! `RunArgs`: the run a command reads — `--data`, and the trainer's [`RunOptions`] (`--reference`,
+//! `--reference-value`, `--from/--until`, `--gap`) — flattened into `fit`, `eval`, `diagnose`,
+//! `compare` and `report`.
+//!
+//! Why one struct: these flags were declared once per command, with drifting help texts, bounds
+//! and window semantics. Here they are declared once (the numbers through the trainer's table of
+//! bounds), and the window means the same everywhere: rows with `from ≤ time < until` of the
+//! model's time column, refused when `--from` is not before `--until` or fewer than two rows
+//! remain. The bin (`--bin`) and the segment temperature stay with each command: their defaults
+//! differ by command.
+
+use std::path::PathBuf;
+use tcomp_train::{Dataset, Roles, RunOptions};
+
+/// The host's model type.
+type HostModel<'a> = tcomp_core::Model<
+    'a,
+    { tcomp_train::rbf64::C },
+    { tcomp_train::features::F },
+    { tcomp_train::features::N },
+>;
+
+/// The run a command reads.
+#[derive(clap::Args, Clone, Debug)]
+pub struct RunArgs {
+    /// Measurement CSV (or .csv.gz).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Reference, window and gaps.
+    #[command(flatten)]
+    pub run: RunOptions,
+}
+
+impl RunArgs {
+    /// Refuses a window whose start is not before its end, before any file is read.
+    pub fn check_window(&self) -> anyhow::Result<()> {
+        if let (Some(from), Some(until)) = (self.run.from, self.run.until) {
+            anyhow::ensure!(
+                from < until,
+                "--from {from} must be less than --until {until} (rows with from ≤ time < until \
+                 are used)"
+            );
+        }
+        Ok(())
+    }
+
+    /// Whether the reference is overridden.
+    pub fn overrides_reference(&self) -> bool {
+        self.run.reference.is_some() || self.run.reference_value.is_some()
+    }
+
+    /// The model's column roles with this run's reference override (a constant wins over a
+    /// column, as in `fit`).
+    pub fn roles(&self, model: &HostModel<'_>) -> Roles {
+        let mut roles = Roles::of_model(model);
+        if let Some(r) = &self.run.reference {
+            roles.reference = Some(r.clone());
+        }
+        if let Some(v) = self.run.reference_value {
+            roles.reference = None;
+            roles.reference_value = Some(v);
+        }
+        roles
+    }
+
+    /// Loads `--data` and keeps the rows of the window (time column `time`); at least two rows
+    /// must remain, since one row has no spread and every figure would be a meaningless zero.
+    pub fn load(&self, time: &str) -> anyhow::Result<Dataset> {
+        self.check_window()?;
+        let mut data = Dataset::load(&self.data)?;
+        let windowed = self.run.from.is_some() || self.run.until.is_some();
+        if windowed {
+            data = data.select_time(
+                time,
+                self.run.from.unwrap_or(f64::NEG_INFINITY),
+                self.run.until.unwrap_or(f64::INFINITY),
+            )?;
+        }
+        if data.len() < 2 {
+            let which = if windowed {
+                "--from/--until select"
+            } else {
+                "the file has"
+            };
+            anyhow::bail!(
+                "{}: {which} {} row(s), and at least 2 are needed to measure anything",
+                self.data.display(),
+                data.len()
+            );
+        }
+        Ok(data)
+    }
+}
