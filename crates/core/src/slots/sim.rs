@@ -70,7 +70,8 @@ fn pattern(step: u32) -> u32 {
 }
 
 impl<const SIZE: usize, const SECTOR: usize> SimNor<SIZE, SECTOR> {
-    const SHAPE: () = assert!(SECTOR > 0 && SECTOR.is_multiple_of(4) && SIZE.is_multiple_of(SECTOR));
+    const SHAPE: () =
+        assert!(SECTOR > 0 && SECTOR.is_multiple_of(4) && SIZE.is_multiple_of(SECTOR));
 
     /// Erased flash, power on, no cut planned.
     pub const fn new() -> Self {
