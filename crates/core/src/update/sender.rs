@@ -155,6 +155,11 @@ impl<'a> Sender<'a> {
         self.info
     }
 
+    /// The sequence number of the current request (a reply with it answers that request).
+    pub const fn seq(&self) -> u16 {
+        self.seq
+    }
+
     /// Requests sent again (after a timeout or a NAK naming another offset).
     pub const fn repeats(&self) -> u32 {
         self.repeats
