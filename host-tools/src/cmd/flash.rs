@@ -52,6 +52,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .timeout(Duration::from_millis(20))
         .open()
         .with_context(|| format!("--port {port_name}: cannot open"))?;
+    // Whatever arrived before the port was raw is stale.
+    port.clear(serialport::ClearBuffer::Input)
+        .with_context(|| format!("--port {port_name}: cannot clear its input"))?;
     let bar = super::progress::Bar::new(args.quiet || args.json);
     bar.start("sending", image.len() as u64, Unit::Bytes);
     let outcome = link::transfer(

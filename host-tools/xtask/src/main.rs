@@ -13,6 +13,7 @@
 mod board;
 mod elf;
 mod qemu;
+mod update;
 mod vector;
 
 use anyhow::{Context, Result, bail};

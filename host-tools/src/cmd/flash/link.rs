@@ -26,6 +26,9 @@ pub struct Outcome {
 }
 
 /// Sends `image` and waits for each reply up to `timeout`; `progress(sent, total)` after each ACK.
+/// The output frames are counted from the unit's first reply (INFO) to its last: what came before
+/// is not part of the update (and a port opened a moment ago may have passed it through a line
+/// discipline that was not raw yet).
 pub fn transfer<L: Read + Write>(
     link: &mut L,
     image: &[u8],
@@ -37,7 +40,7 @@ pub fn transfer<L: Read + Write>(
     let mut outputs = frame::Decoder::new();
     let (mut first, mut last) = (None, None);
     let mut request = [0u8; MAX_FRAME];
-    let mut buf = [0u8; 512];
+    let mut buf = [0u8; 4096];
     while let Some(n) = tx.request(&mut request) {
         link.write_all(request.get(..n).unwrap_or(&[]))?;
         link.flush()?;
@@ -52,10 +55,17 @@ pub fn transfer<L: Read + Write>(
                 Err(e) => return Err(e),
             };
             for &b in buf.get(..got).unwrap_or(&[]) {
+                // Counted from the unit's first reply on: the update's span.
+                let counting = tx.info().is_some();
                 outputs.feed(&[b], |f| {
-                    first.get_or_insert(f.sequence);
-                    last = Some(f.sequence);
+                    if counting {
+                        first.get_or_insert(f.sequence);
+                        last = Some(f.sequence);
+                    }
                 });
+                if !counting {
+                    outputs = frame::Decoder::new();
+                }
                 if let Some(p) = replies.push(b) {
                     tx.on_reply(&p);
                 }
