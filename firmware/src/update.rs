@@ -4,7 +4,7 @@
 //! it.
 //!
 //! It is the core's [`Receiver`] behind the core's frame [`Decoder`]: one protocol frame of
-//! receive buffer (267 B), and the reply encoded into a buffer of one reply frame.
+//! receive buffer (75 B), and the reply encoded into a buffer of one reply frame.
 
 use embedded_storage::nor_flash::NorFlash;
 use tcomp_core::slots::{Active, Layout, SlotId};
