@@ -8,7 +8,8 @@
 //! * `cargo xtask power-cut` — the model slots' power-loss test (a power cut after and inside every
 //!   write step of three updates); prints its `POWER-CUT` line.
 //! * `cargo xtask qemu`  — the QEMU replay of the 200 Hz loop with bit-exact host parity, fault
-//!   checks and budgets (see `qemu.rs`).
+//!   checks and budgets (see `qemu.rs`), and a model update over the emulated UART with
+//!   `tcomp flash` (`update.rs`).
 
 mod board;
 mod elf;

@@ -37,7 +37,7 @@ pub const MAX_PAYLOAD: usize = 4 + MAX_CHUNK;
 /// Longest frame: 75 bytes, the unit's whole receive buffer.
 pub const MAX_FRAME: usize = HEADER_LEN + MAX_PAYLOAD + 4;
 /// Longest serial number an INFO reply carries (bytes; a longer one is cut).
-pub const MAX_SERIAL: usize = 16;
+pub const MAX_SERIAL: usize = 32;
 
 /// What a frame is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

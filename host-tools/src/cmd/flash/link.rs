@@ -42,8 +42,15 @@ pub fn transfer<L: Read + Write>(
     let mut request = [0u8; MAX_FRAME];
     let mut buf = [0u8; 4096];
     while let Some(n) = tx.request(&mut request) {
-        link.write_all(request.get(..n).unwrap_or(&[]))?;
-        link.flush()?;
+        // A link whose other end is not there (yet) — a pty before QEMU reads it, a port mid-reset —
+        // loses this request like a noisy line would: the timeout sends it again.
+        match link
+            .write_all(request.get(..n).unwrap_or(&[]))
+            .and_then(|()| link.flush())
+        {
+            Err(e) if e.kind() != ErrorKind::BrokenPipe => return Err(e),
+            _ => {}
+        }
         let seq = tx.seq();
         let deadline = Instant::now() + timeout;
         let answered = loop {
@@ -52,6 +59,10 @@ pub fn transfer<L: Read + Write>(
                 Ok(k) => k,
                 Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => 0,
                 Err(e) if e.kind() == ErrorKind::Interrupted => 0,
+                Err(e) if e.kind() == ErrorKind::BrokenPipe => {
+                    std::thread::sleep(Duration::from_millis(10));
+                    0
+                }
                 Err(e) => return Err(e),
             };
             for &b in buf.get(..got).unwrap_or(&[]) {
