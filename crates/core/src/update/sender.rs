@@ -249,6 +249,7 @@ impl<'a> Sender<'a> {
                 self.repeats += 1;
                 match reply.u32_at(1) {
                     Some(expected) if expected < self.len() => Step::Data(expected),
+                    Some(expected) if expected == self.len() => Step::Commit,
                     _ => Step::End(Status::Failed(Failure::Unit(reason))),
                 }
             }
