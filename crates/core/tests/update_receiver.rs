@@ -442,3 +442,20 @@ proptest! {
         prop_assert_eq!(found.last(), Some(&(Kind::Data, seq, payload)));
     }
 }
+
+/// A flash that fails mid-update (here: the power model's cut, seen by the receiver as an error)
+/// is reported as a NAK, and the next BEGIN starts over on the same inactive slot.
+#[test]
+fn a_flash_error_is_reported_and_the_update_can_start_again() {
+    let (old, new) = (image(15, 400), image(16, 600));
+    let mut unit = unit_with(&old);
+    unit.flash.plan(tcomp_core::slots::sim::Cut::After(20));
+    assert_eq!(unit.begin(&new).kind(), Kind::Ack);
+    nak(unit.data(&new, 0), Reason::Flash);
+    nak(unit.data(&new, MAX_CHUNK), Reason::NotStarted);
+    unit.flash.power_on();
+    assert_eq!(unit.begin(&new).kind(), Kind::Ack);
+    unit.send_all(&new);
+    assert_eq!(unit.send(Kind::Commit, 3, &[]).reason(), Reason::Ok);
+    assert_eq!(booted(&mut unit.flash), Some((SlotId::B, 2, new)));
+}
