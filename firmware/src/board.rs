@@ -3,14 +3,17 @@
 //! semihosting exit. Everything else — the loop, the frames, the time-base check, the fault record —
 //! is the library's and shared with the STM32F407 board.
 //!
+//! The `MODELS` region's RAM gets NOR flash semantics ([`RamFlash`]) for the model slots' update.
+//!
 //! Addresses and interrupt lines are QEMU 7.2's `hw/arm/mps2.c` for the AN385/AN386 images: CMSDK
 //! APB timer 0 at `0x4000_0000` on IRQ 8, timer 1 at `0x4000_1000` on IRQ 9 (both clocked from the
-//! 25 MHz system clock), UART0 at `0x4000_4000` (QEMU's first `-serial`), and the CMSDK APB watchdog
+//! 25 MHz system clock), UART0 at `0x4000_4000` (QEMU's first `-serial`; receive IRQ 0), and the CMSDK APB watchdog
 //! at `0x4000_8000` whose interrupt is the NMI and whose second expiry resets the system (QEMU
 //! restarts the guest unless `-no-reboot` is given; RAM outside the loaded images survives).
 
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
+use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 
 /// Instructions per SysTick tick on mps2-an386 under `-icount shift=0` (1 GHz virtual / 25 MHz).
 pub const INSTRUCTIONS_PER_TICK: u32 = 40;
@@ -18,6 +21,8 @@ pub const INSTRUCTIONS_PER_TICK: u32 = 40;
 pub const SYSCLK_HZ: u32 = 25_000_000;
 /// IRQ number of CMSDK timer 0 (the sample timer).
 pub const TIMER0_IRQ: i16 = 8;
+/// IRQ number of UART 0's receive interrupt.
+pub const UART0_RX_IRQ: i16 = 0;
 
 fn write(addr: usize, value: u32) {
     // SAFETY: `addr` is a register of a CMSDK peripheral of this board (the constants below), which
@@ -102,7 +107,8 @@ impl TimeBase {
     }
 }
 
-/// CMSDK APB UART 0, transmit only, polled: QEMU sends each byte to its `-serial` backend at once.
+/// CMSDK APB UART 0, polled: QEMU sends each byte to its `-serial` backend at once, and holds
+/// received bytes back until the one-byte receive buffer has been read (nothing is lost).
 pub struct Uart {
     base: usize,
 }
@@ -113,15 +119,48 @@ impl Uart {
     const CTRL: usize = 0x08;
     const BAUDDIV: usize = 0x10;
     const STATE_TX_FULL: u32 = 1;
+    const STATE_RX_FULL: u32 = 1 << 1;
+    const INTCLEAR: usize = 0x0C;
     const CTRL_TX_ENABLE: u32 = 1;
+    const CTRL_RX_ENABLE: u32 = 1 << 1;
+    const CTRL_RX_IRQ_ENABLE: u32 = 1 << 3;
+    const INT_RX: u32 = 1 << 1;
 
-    /// UART 0 with its transmitter enabled.
+    /// UART 0 with its transmitter and receiver enabled.
     pub fn uart0() -> Self {
-        let u = Self { base: 0x4000_4000 };
+        let u = Self::handle0();
         // 25 MHz / 217 ≈ 115,200 Bd on the real board; QEMU needs a divider of at least 16.
         write(u.base + Self::BAUDDIV, 217);
-        write(u.base + Self::CTRL, Self::CTRL_TX_ENABLE);
+        write(
+            u.base + Self::CTRL,
+            Self::CTRL_TX_ENABLE | Self::CTRL_RX_ENABLE,
+        );
         u
+    }
+
+    /// UART 0 as configured by [`Uart::uart0`], without touching its registers: a second handle
+    /// for the update task (receive, and replies sent inside a critical section).
+    pub const fn handle0() -> Self {
+        Self { base: 0x4000_4000 }
+    }
+
+    /// Raises [`UART0_RX_IRQ`] for every received byte (until cleared).
+    pub fn enable_rx_interrupt(&self) {
+        let ctrl = read(self.base + Self::CTRL);
+        write(self.base + Self::CTRL, ctrl | Self::CTRL_RX_IRQ_ENABLE);
+    }
+
+    /// Acknowledges the receive interrupt (a byte received afterwards raises it again).
+    pub fn clear_rx_interrupt(&self) {
+        write(self.base + Self::INTCLEAR, Self::INT_RX);
+    }
+
+    /// The received byte, if one is waiting.
+    pub fn read(&self) -> Option<u8> {
+        if read(self.base + Self::STATE) & Self::STATE_RX_FULL == 0 {
+            return None;
+        }
+        Some(read(self.base + Self::DATA) as u8)
     }
 
     /// Sends `bytes`, waiting for room before each.
@@ -130,6 +169,110 @@ impl Uart {
             while read(self.base + Self::STATE) & Self::STATE_TX_FULL != 0 {}
             write(self.base + Self::DATA, u32::from(b));
         }
+    }
+}
+
+/// The QEMU board's model "flash": the `MODELS` region of mps2-an386's SSRAM (RAM in QEMU), given
+/// NOR semantics so the update code runs as on a part: an erase sets a whole slot-sized sector to
+/// 0xFF, a program writes 4-byte words and can only clear bits.
+pub struct RamFlash {
+    base: usize,
+    len: usize,
+}
+
+/// The erase unit: one slot (`tcomp_firmware::slots::QEMU_LAYOUT`).
+const RAM_FLASH_SECTOR: usize = 32 * 1024;
+
+impl RamFlash {
+    /// The flash over `[base, base + len)`.
+    ///
+    /// # Safety
+    /// The range must be the `MODELS` region (mapped, word aligned, RAM-backed under QEMU), and no
+    /// Rust reference may be alive over the part of it this flash erases or programs while it does
+    /// (the loop's models borrow only the active slot, which the update never writes).
+    pub unsafe fn new(base: *const u8, len: usize) -> Self {
+        Self {
+            base: base as usize,
+            len,
+        }
+    }
+
+    /// The bytes `[offset, offset + len)`, as the CPU reads them; `None` outside the region.
+    pub fn bytes(&self, offset: u32, len: u32) -> Option<&[u8]> {
+        let end = (offset as usize).checked_add(len as usize)?;
+        if end > self.len {
+            return None;
+        }
+        // SAFETY: inside the region (checked), which `new`'s contract keeps mapped; the slice
+        // borrows `self`, so no erase or program (`&mut self`) happens while it lives.
+        Some(unsafe {
+            core::slice::from_raw_parts((self.base + offset as usize) as *const u8, len as usize)
+        })
+    }
+
+    fn check(&self, offset: u32, len: usize, align: usize) -> Result<usize, NorFlashErrorKind> {
+        let at = offset as usize;
+        if !at.is_multiple_of(align) || !len.is_multiple_of(align) {
+            return Err(NorFlashErrorKind::NotAligned);
+        }
+        match at.checked_add(len) {
+            Some(end) if end <= self.len => Ok(self.base + at),
+            _ => Err(NorFlashErrorKind::OutOfBounds),
+        }
+    }
+}
+
+impl ErrorType for RamFlash {
+    type Error = NorFlashErrorKind;
+}
+
+impl ReadNorFlash for RamFlash {
+    const READ_SIZE: usize = 1;
+
+    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), NorFlashErrorKind> {
+        let at = self.check(offset, bytes.len(), 1)?;
+        for (i, b) in bytes.iter_mut().enumerate() {
+            // SAFETY: inside the region (checked above).
+            *b = unsafe { core::ptr::read_volatile((at + i) as *const u8) };
+        }
+        Ok(())
+    }
+
+    fn capacity(&self) -> usize {
+        self.len
+    }
+}
+
+impl NorFlash for RamFlash {
+    const WRITE_SIZE: usize = 4;
+    const ERASE_SIZE: usize = RAM_FLASH_SECTOR;
+
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), NorFlashErrorKind> {
+        let len = (to as usize)
+            .checked_sub(from as usize)
+            .ok_or(NorFlashErrorKind::OutOfBounds)?;
+        let at = self.check(from, len, RAM_FLASH_SECTOR)?;
+        for p in (at..at + len).step_by(4) {
+            // SAFETY: a word inside the region (checked, sector aligned); no reference over it is
+            // alive (`new`'s contract).
+            unsafe { core::ptr::write_volatile(p as *mut u32, u32::MAX) };
+        }
+        Ok(())
+    }
+
+    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), NorFlashErrorKind> {
+        let at = self.check(offset, bytes.len(), 4)?;
+        for (i, w) in bytes.chunks_exact(4).enumerate() {
+            let word: [u8; 4] = w.try_into().map_err(|_| NorFlashErrorKind::NotAligned)?;
+            let p = (at + 4 * i) as *mut u32;
+            // SAFETY: a word inside the region (checked, word aligned); no reference over it is
+            // alive (`new`'s contract). NOR: a program only clears bits.
+            unsafe {
+                let old = core::ptr::read_volatile(p);
+                core::ptr::write_volatile(p, old & u32::from_le_bytes(word));
+            }
+        }
+        Ok(())
     }
 }
 

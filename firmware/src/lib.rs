@@ -1,6 +1,7 @@
 //! The firmware: the compensation loop ([`app`]), the fault record kept across resets ([`fault`]),
 //! the time-base check ([`timing`]),
-//! the model-blob image in flash ([`image`]), the replay board of the QEMU run ([`replay`]), and
+//! the model-blob image in flash ([`image`]) and its two slots ([`slots`]), the update task that
+//! rewrites them over the serial link ([`update`]), the replay board of the QEMU run ([`replay`]), and
 //! board support for the binaries (semihosting exit codes, the SysTick instruction counter).
 //!
 //! Only the board support touches hardware and is compiled for the target alone
@@ -17,7 +18,9 @@ pub mod app;
 pub mod fault;
 pub mod image;
 pub mod replay;
+pub mod slots;
 pub mod timing;
+pub mod update;
 
 #[cfg(target_os = "none")]
 mod board;

@@ -47,6 +47,8 @@ enum Command {
     Demo(cmd::demo::Args),
     /// Decode a capture of the firmware's serial output frames into CSV (or JSON).
     Frames(cmd::frames::Args),
+    /// Replace a unit's model image over its serial link (A/B slots, verified, committed last).
+    Flash(cmd::flash::Args),
 }
 
 fn main() -> ExitCode {
@@ -80,6 +82,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Report(args) => cmd::report::run(&args),
         Command::Demo(args) => cmd::demo::run(&args),
         Command::Frames(args) => cmd::frames::run(&args),
+        Command::Flash(args) => cmd::flash::run(&args),
     }
 }
 

@@ -21,6 +21,9 @@
 //!   `step(inputs, raw) → (compensated, status)`.
 //!
 //! [`frame`] is the output frame the firmware sends per sample and the host decodes.
+//! [`slots`] keeps the model image in two flash slots (A/B) with a commit marker written last, and
+//! [`update`] is the framed protocol and the unit's receiver that replace an image over the serial
+//! link through them.
 //!
 //! Capacities are const generics (`C` centers, `F` features, `N` program nodes), so the firmware sizes
 //! its models for its channels and the host uses the large defaults.
@@ -45,9 +48,11 @@ pub mod point;
 pub mod program;
 pub mod rbf;
 mod real;
+pub mod slots;
 pub mod stream;
 mod tag;
 pub mod testing;
+pub mod update;
 pub mod vocab;
 
 pub use blob::{BlobError, ColumnRoles, FeatureRange, Meta, Model, ResidualLevel, SensorKind};

@@ -37,9 +37,12 @@ use tcomp_firmware::fault::{FaultKind, FaultRecord};
 use tcomp_firmware::replay::{
     Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, Vector,
 };
+use tcomp_firmware::slots::{QEMU_LAYOUT, Source, choose, validates};
 use tcomp_firmware::timing::TimeCheck;
+use tcomp_firmware::update::{MAX_REPLY, UpdateTask};
 use tcomp_firmware::{
-    HASH_START, InstructionCounter, TIMER0_IRQ, TimeBase, Timer, Uart, Watchdog, exit, fold_hash,
+    HASH_START, InstructionCounter, RamFlash, TIMER0_IRQ, TimeBase, Timer, UART0_RX_IRQ, Uart,
+    Watchdog, exit, fold_hash,
 };
 
 /// Instructions per SysTick tick under `-icount shift=3` (40 ns per tick, 8 ns per instruction).
@@ -55,6 +58,11 @@ const PAINT_BYTES: usize = 32 * 1024;
 const PAINT: u32 = 0xA5A5_5A5A;
 /// Marks a valid [`Run`] in no-init RAM.
 const RUN_MAGIC: u32 = 0x52E9_1A7C;
+/// Marks the reset after a committed update (in [`Run::update_reset`]).
+const UPDATE_RESET: u32 = 0x0B5E_7A11;
+/// The unit's serial number in the update protocol's INFO reply. A board reads its own; QEMU's
+/// has none, so this names the board.
+const SERIAL: &[u8] = b"QEMU-MPS2-AN386";
 
 /// The loop's state: about 11 KB, in `.data`, never on the stack.
 static mut APP: App<'static> = App::new(&IMU6);
@@ -66,6 +74,9 @@ static mut FAULT: MaybeUninit<FaultRecord> = MaybeUninit::uninit();
 static mut RUN: MaybeUninit<Run> = MaybeUninit::uninit();
 /// Everything the sample interrupt owns, handed over by `main` before the timer starts.
 static LOOP: Mutex<RefCell<Option<Loop>>> = Mutex::new(RefCell::new(None));
+/// The update task and the flash it writes, owned by UART 0's receive interrupt once `main` has set
+/// it (about 400 B: one protocol frame of receive buffer and the receiver's state).
+static mut UPDATE: Option<Updater> = None;
 /// Set by the sample interrupt after the vector's last sample.
 static DONE: AtomicBool = AtomicBool::new(false);
 
@@ -101,6 +112,8 @@ struct Run {
     /// first two timer interrupts: the period as measured by the core's own clock (125,000).
     instr_max_at: u32,
     period_ticks: u32,
+    /// [`UPDATE_RESET`] when this boot follows the reset that activates an update.
+    update_reset: u32,
 }
 
 impl Run {
@@ -119,7 +132,14 @@ impl Run {
         stack_peak: 0,
         instr_max_at: 0,
         period_ticks: 0,
+        update_reset: 0,
     };
+}
+
+/// What the receive interrupt owns.
+struct Updater {
+    task: UpdateTask,
+    flash: RamFlash,
 }
 
 /// The sample timer's IRQ line, for the NVIC.
@@ -320,6 +340,9 @@ fn main() -> ! {
     let previous = unsafe { run.assume_init_read() };
     let mut boot_flags = 0;
     let run = match fault.and_then(|f| f.valid()) {
+        _ if previous.magic == RUN_MAGIC && previous.update_reset == UPDATE_RESET => {
+            run.write(Run::NEW)
+        }
         Some(FaultKind::Watchdog) if previous.magic == RUN_MAGIC => {
             defmt::println!(
                 "reset cause: watchdog; resuming at sample {=u32}",
@@ -337,7 +360,15 @@ fn main() -> ! {
         }
         None => run.write(Run::NEW),
     };
-    let image = region(&raw const __models_start, &raw const __models_end);
+    let models = region(&raw const __models_start, &raw const __models_end);
+    // SAFETY: MODELS is mapped RAM under QEMU; the update writes only the inactive slot, and the
+    // loop's models borrow only the active one (`choice.image`).
+    let mut flash = unsafe { RamFlash::new(models.as_ptr(), models.len()) };
+    let choice = choose(&mut flash, &QEMU_LAYOUT, models);
+    let image = choice.image;
+    if previous.magic == RUN_MAGIC && previous.update_reset == UPDATE_RESET {
+        update_boot(app, image, choice.source);
+    }
     let bytes = region(&raw const __replay_start, &raw const __replay_end);
     let vector = match Vector::parse(bytes) {
         Ok(v) => v,
@@ -354,6 +385,7 @@ fn main() -> ! {
             exit(false)
         }
     };
+    defmt::info!("models: {}", choice.source);
     defmt::info!(
         "replay: configuration {=u16}, {=usize} samples, {=usize} thermometers, {=usize} counters",
         vector.config,
@@ -372,6 +404,23 @@ fn main() -> ! {
         }
     }
 
+    // The update task: UART 0's receive interrupt, below the sample timer's priority, so the loop
+    // preempts it (an erase, a chunk, the read-back CRC) at every timer edge.
+    let port = Uart::handle0();
+    let update: *mut Option<Updater> = &raw mut UPDATE;
+    // SAFETY: the UART interrupt, UPDATE's only other user, is not unmasked yet.
+    unsafe {
+        *update = Some(Updater {
+            task: UpdateTask::new(QEMU_LAYOUT, choice.active),
+            flash,
+        });
+    }
+    let mut nvic = cp.NVIC;
+    // SAFETY: priorities change before either interrupt is unmasked; a lower number preempts.
+    unsafe {
+        nvic.set_priority(Irq(TIMER0_IRQ as u16), 0x00);
+        nvic.set_priority(Irq(UART0_RX_IRQ as u16), 0x80);
+    }
     let timer = Timer::timer0();
     let time = TimeBase::start();
     let board = vector.board_at(run.next as usize);
@@ -398,6 +447,10 @@ fn main() -> ! {
     cortex_m::interrupt::free(|cs| *LOOP.borrow(cs).borrow_mut() = Some(state));
     // SAFETY: the handler (DefaultHandler, IRQ 8) only takes LOOP inside a critical section.
     unsafe { NVIC::unmask(Irq(TIMER0_IRQ as u16)) };
+    // A byte already waiting raises the interrupt at once.
+    port.enable_rx_interrupt();
+    // SAFETY: UPDATE is set; the handler (DefaultHandler, IRQ 0) is its only user from here on.
+    unsafe { NVIC::unmask(Irq(UART0_RX_IRQ as u16)) };
     // A board would sleep here (WFI). Under `-icount …,sleep=off` QEMU 7.2 delivers only every
     // second CMSDK timer interrupt across a WFI (measured: two timer periods between interrupts
     // with WFI, one when the CPU does not sleep; the timer's own INTSTATUS, polled, sets every
@@ -405,6 +458,9 @@ fn main() -> ! {
     while !DONE.load(Ordering::Acquire) {
         cortex_m::asm::nop();
     }
+    NVIC::mask(Irq(UART0_RX_IRQ as u16));
+    // SAFETY: the UART interrupt, UPDATE's only other user, is masked.
+    let committed = unsafe { (*update).as_ref() }.and_then(|u| u.task.committed());
     NVIC::mask(Irq(TIMER0_IRQ as u16));
     let Some(state) = cortex_m::interrupt::free(|cs| LOOP.borrow(cs).borrow_mut().take()) else {
         exit(false)
@@ -431,7 +487,36 @@ fn main() -> ! {
         r.watchdog_resets,
         r.stack_peak
     );
-    exit(r.mismatches == 0 && r.samples > 0)
+    let ok = r.mismatches == 0 && r.samples > 0;
+    if let (true, Some((slot, generation))) = (ok, committed) {
+        defmt::println!(
+            "UPDATE-COMMITTED slot={} generation={=u32}: resetting to run it",
+            slot,
+            generation
+        );
+        r.update_reset = UPDATE_RESET;
+        cortex_m::peripheral::SCB::sys_reset();
+    }
+    exit(ok)
+}
+
+/// The boot after an update's reset: loads the models the boot chose, reports them and ends the
+/// run (the replay vector was played by the boot before).
+fn update_boot(app: &mut App<'static>, image: &'static [u8], source: Source) -> ! {
+    app.reset(&IMU6);
+    let loaded = app
+        .load(image)
+        .iter()
+        .take(IMU6.len())
+        .filter(|r| r.is_ok())
+        .count();
+    defmt::println!(
+        "UPDATE-BOOT source={} models_loaded={=usize} channels={=usize}",
+        source,
+        loaded,
+        IMU6.len()
+    );
+    exit(matches!(source, Source::Slot(..)))
 }
 
 #[exception]
@@ -442,6 +527,32 @@ unsafe fn DefaultHandler(irqn: i16) {
                 l.tick();
             }
         });
+    } else if irqn == UART0_RX_IRQ {
+        on_receive();
+    }
+}
+
+/// UART 0's receive interrupt: every waiting byte through the update task, each reply sent whole.
+fn on_receive() {
+    let update: *mut Option<Updater> = &raw mut UPDATE;
+    // SAFETY: `main` set UPDATE before unmasking this interrupt and touches it again only after
+    // masking it; the interrupt does not preempt itself.
+    let Some(u) = (unsafe { (*update).as_mut() }) else {
+        return;
+    };
+    let port = Uart::handle0();
+    port.clear_rx_interrupt();
+    let mut reply = [0u8; MAX_REPLY];
+    while let Some(byte) = port.read() {
+        let validate =
+            |f: &mut RamFlash, off, len| f.bytes(off, len).is_some_and(|b| validates(b, 0, len));
+        if let Some(n) = u
+            .task
+            .push(byte, &mut u.flash, SERIAL, validate, &mut reply)
+        {
+            // Whole, between two frames of the loop: the timer interrupt waits for these bytes.
+            cortex_m::interrupt::free(|_| port.write_all(reply.get(..n).unwrap_or(&[])));
+        }
     }
 }
 

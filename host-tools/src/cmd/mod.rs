@@ -23,6 +23,7 @@ pub mod demo;
 pub mod diagnose;
 pub mod eval;
 pub mod fit;
+pub mod flash;
 pub mod frames;
 pub mod image;
 pub mod inspect;

@@ -8,8 +8,8 @@ use crate::{TARGET, cargo};
 
 const PACKAGE: &str = "tcomp-board-stm32f4";
 const BIN: &str = "tcomp-stm32f4";
-/// Flash for the firmware: 1 MiB less sector 11 (128 KiB), which holds the model image.
-pub const FLASH_BUDGET: u64 = (1024 - 128) * 1024;
+/// Flash for the firmware: 1 MiB less sectors 10 and 11 (2 × 128 KiB), the two model slots.
+pub const FLASH_BUDGET: u64 = (1024 - 256) * 1024;
 /// Static RAM: SRAM1 + SRAM2 (the stack has the 64 KiB CCM RAM to itself).
 const STATIC_RAM_BUDGET: u64 = 128 * 1024;
 

@@ -5,12 +5,16 @@
 //!   QEMU smoke run with its instruction budget.
 //! * `cargo xtask board` — only the board binary's build, clippy and sizes.
 //! * `cargo xtask smoke` — only the QEMU smoke run.
+//! * `cargo xtask power-cut` — the model slots' power-loss test (a power cut after and inside every
+//!   write step of three updates); prints its `POWER-CUT` line.
 //! * `cargo xtask qemu`  — the QEMU replay of the 200 Hz loop with bit-exact host parity, fault
-//!   checks and budgets (see `qemu.rs`).
+//!   checks and budgets (see `qemu.rs`), and a model update over the emulated UART with
+//!   `tcomp flash` (`update.rs`).
 
 mod board;
 mod elf;
 mod qemu;
+mod update;
 mod vector;
 
 use anyhow::{Context, Result, bail};
@@ -27,7 +31,8 @@ fn main() -> Result<()> {
         "smoke" => smoke(),
         "qemu" => qemu::qemu(),
         "board" => board::board(),
-        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board>"),
+        "power-cut" => power_cut(),
+        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board|power-cut>"),
     }
 }
 
@@ -83,6 +88,7 @@ fn ci() -> Result<()> {
         "tcomp-board-stm32f4",
     ])?;
     cargo(&["test", "-p", "tcomp-firmware", "--lib"])?;
+    power_cut()?;
     cargo(&["build", "-p", "tcomp-core", "--target", TARGET, "--release"])?;
     cargo(&["build", "-p", "tcomp-hal", "--target", TARGET, "--release"])?;
     board::board()?;
@@ -122,6 +128,36 @@ fn smoke() -> Result<()> {
     println!(
         "smoke: ok, {per_eval} instructions per 32x4 RBF evaluation (budget {RBF_EVAL_BUDGET})"
     );
+    Ok(())
+}
+
+/// Runs the power-loss test of the model slots and reports how many cut points it tried.
+fn power_cut() -> Result<()> {
+    let args = [
+        "test",
+        "-p",
+        "tcomp-core",
+        "--test",
+        "power_cut",
+        "--",
+        "--nocapture",
+    ];
+    eprintln!("$ cargo {}", args.join(" "));
+    let out = Command::new(env!("CARGO"))
+        .args(args)
+        .stderr(Stdio::inherit())
+        .output()
+        .context("running the power-loss test")?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("POWER-CUT "))
+        .context("the power-loss test printed no POWER-CUT line")?;
+    println!("{line}");
+    let cut_points = field(line, "cut_points=").context("no cut_points in the POWER-CUT line")?;
+    if !out.status.success() || field(line, "mixed=") != Some(0) || cut_points == 0 {
+        bail!("power-loss test failed ({})", out.status);
+    }
     Ok(())
 }
 

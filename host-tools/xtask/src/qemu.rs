@@ -14,7 +14,7 @@ use tcomp_firmware::replay::{CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TIME_
 
 /// Budgets, from the issue and the part. Instructions: the worst 6-channel sample with every model
 /// evaluated every sample (no stagger): 11,360 measured. Flash: an STM32F405/407 has 1 MiB, less
-/// the 128 KiB sector 11 that holds the model image (the board crate's budget, `board.rs`).
+/// the two 128 KiB sectors 10–11 that hold the model slots (the board crate's budget, `board.rs`).
 /// Memory: static RAM + stack ≤ 16 KiB for the 6-channel run; measured 11,732 B static (the `App`
 /// with six models) + 4,052 B stack (6,544 B while the blob was decoded by value: serde moved the
 /// model through four stack copies; `Model::decode_into` decodes in place).
@@ -196,7 +196,7 @@ fn compare_frames(capture: &[u8], expected: &[Vec<u8>]) -> Result<usize> {
 }
 
 /// The firmware's summary numbers of one run.
-struct Summary {
+pub struct Summary {
     samples: u64,
     flagged: u64,
     mean: u64,
@@ -208,7 +208,7 @@ struct Summary {
 }
 
 /// The firmware's summary numbers of one run, checked against the host's hash.
-fn check(text: &str, host_hash: u32, samples: usize) -> Result<Summary> {
+pub fn check(text: &str, host_hash: u32, samples: usize) -> Result<Summary> {
     let line = text
         .lines()
         .find(|l| l.contains("REPLAY-SUMMARY"))
@@ -555,6 +555,22 @@ pub fn qemu() -> Result<()> {
             timing = Some((s.mean, s.max));
         }
     }
+    // The update run: the same IMU6 inputs without the board's injected faults (a watchdog reset
+    // would boot the new image in the middle of the vector), the corrupt image as the initial one.
+    imu.board_faults.iter_mut().for_each(|f| *f = 0);
+    let d = build(CONFIG_IMU6, &IMU6, &imu, &corrupt)?;
+    let vector_d = work.join("vector-imu6-update.bin");
+    std::fs::write(&vector_d, &d.bytes)?;
+    println!("--- QEMU update over the UART ---");
+    crate::update::run(
+        &work,
+        &elf,
+        &work.join("models-corrupt.bin"),
+        &vector_d,
+        &work.join("models.bin"),
+        d.hash,
+        d.served.iter().filter(|&&s| s).count(),
+    )?;
     let (mean, worst) = timing.context("no imu6 run")?;
     println!("{frames} UART frames in all, decoded and identical to the host's");
     let (flash, static_ram) = crate::elf::flash_and_static_ram(&elf)?;

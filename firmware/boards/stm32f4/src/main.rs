@@ -28,14 +28,26 @@ unsafe extern "C" {
     static __models_end: u8;
 }
 
-/// The model-blob image region of `memory.x` (flash sector 11).
-fn models_image() -> &'static [u8] {
+/// The model slots' region of `memory.x` (flash sectors 10 and 11: slot A, slot B).
+fn models_region() -> &'static [u8] {
     let start = core::ptr::addr_of!(__models_start);
     let end = core::ptr::addr_of!(__models_end);
     let len = (end as usize).saturating_sub(start as usize);
-    // SAFETY: the linker symbols bound flash sector 11, which is always readable and which the
-    // firmware never writes; an erased sector reads 0xFF, which the image reader rejects.
+    // SAFETY: the linker symbols bound flash sectors 10–11, which are always readable and which
+    // this firmware never writes (it has no update task yet); erased flash reads 0xFF, which the
+    // slot and image readers reject.
     unsafe { core::slice::from_raw_parts(start, len) }
+}
+
+/// The image to run: the newest committed slot that validates, else a bare image a probe wrote
+/// at slot A, else none (`tcomp_firmware::slots`).
+fn models_image() -> &'static [u8] {
+    let choice = tcomp_firmware::slots::choose_mapped(
+        &tcomp_firmware::slots::STM32F4_LAYOUT,
+        models_region(),
+    );
+    defmt::info!("models: {}", choice.source);
+    choice.image
 }
 
 /// Bytes the UART queue holds (511 usable): six 84-byte six-channel frames. At 921,600

@@ -1,0 +1,338 @@
+//! The update protocol's frames and their byte-at-a-time decoder.
+//!
+//! ```text
+//! offset  size  field
+//! 0       2     sync 0xEB 0x91 (the output frames' 0xEB 0x90 with the last bit set: one search)
+//! 2       1     kind (see [`Kind`])
+//! 3       2     sequence u16: the host numbers its requests; a reply carries the request's number
+//! 5       2     payload length (≤ MAX_PAYLOAD)
+//! 7       len   payload
+//! 7+len   4     CRC-32 (the core's) of bytes 2 .. 7+len
+//! ```
+//!
+//! Payloads (little-endian): BEGIN = total length u32, image CRC-32 u32; DATA = offset u32, then
+//! 1..=[`MAX_CHUNK`] bytes; NAK = reason u8 (see [`Reason`]), expected offset u32; RESULT = reason
+//! u8 (0 ok), slot u8, generation u32; INFO = active slot u8 (0xFF: none), generation u32, slot
+//! capacity u32, then the unit's serial (≤ [`MAX_SERIAL`] bytes). HELLO, COMMIT, ABORT and ACK
+//! carry nothing.
+//!
+//! The decoder is the output frames' approach (`crate::frame`): after garbage or a failed CRC it
+//! searches again from the byte after the false start, so a host listening to a link that carries
+//! both the unit's output frames and its update replies finds every reply (each output frame is
+//! garbage to it, and the reverse), and a unit recovers from a corrupt request at the next sync.
+
+use crate::slots::Crc32;
+
+/// The two bytes every update frame starts with.
+pub const SYNC: [u8; 2] = [0xEB, 0x91];
+/// Bytes before the payload.
+pub const HEADER_LEN: usize = 7;
+/// Most image bytes in one DATA frame. 64, not more: the unit's receive buffer is one frame
+/// (75 B), and the QEMU replay firmware's static RAM + stack budget (16 KiB) had 228 B left for the
+/// whole update task; 256-byte chunks (a 267-byte buffer) went over it by 184 B. The cost is the
+/// frame overhead: 11 B per 64 (17 %), and four times the round trips.
+pub const MAX_CHUNK: usize = 64;
+/// Longest payload (DATA: offset + chunk).
+pub const MAX_PAYLOAD: usize = 4 + MAX_CHUNK;
+/// Longest frame: 75 bytes, the unit's whole receive buffer.
+pub const MAX_FRAME: usize = HEADER_LEN + MAX_PAYLOAD + 4;
+/// Longest serial number an INFO reply carries (bytes; a longer one is cut).
+pub const MAX_SERIAL: usize = 32;
+
+/// What a frame is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Kind {
+    /// Host: who are you (reply INFO).
+    Hello = 0x01,
+    /// Host: an image of this length and CRC follows (erases the inactive slot).
+    Begin = 0x02,
+    /// Host: image bytes at an offset.
+    Data = 0x03,
+    /// Host: all sent; verify and commit (reply RESULT).
+    Commit = 0x04,
+    /// Host: give up this update (the active slot is untouched).
+    Abort = 0x05,
+    /// Unit: request done.
+    Ack = 0x81,
+    /// Unit: request refused, with a reason.
+    Nak = 0x82,
+    /// Unit: the update's outcome.
+    Result = 0x83,
+    /// Unit: serial, active slot, generation.
+    Info = 0x84,
+}
+
+impl Kind {
+    /// The kind of a frame's kind byte.
+    pub const fn from_u8(b: u8) -> Option<Self> {
+        Some(match b {
+            0x01 => Self::Hello,
+            0x02 => Self::Begin,
+            0x03 => Self::Data,
+            0x04 => Self::Commit,
+            0x05 => Self::Abort,
+            0x81 => Self::Ack,
+            0x82 => Self::Nak,
+            0x83 => Self::Result,
+            0x84 => Self::Info,
+            _ => return None,
+        })
+    }
+}
+
+/// Why the unit refused a request or an update failed (the NAK's and RESULT's code).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+#[non_exhaustive]
+pub enum Reason {
+    /// Success (RESULT only).
+    Ok = 0,
+    /// A payload of the wrong size for its kind, or an unknown kind.
+    Malformed = 1,
+    /// DATA or COMMIT without a BEGIN.
+    NotStarted = 2,
+    /// BEGIN with other parameters during an update (ABORT first).
+    Busy = 3,
+    /// The image does not fit a slot.
+    TooLarge = 4,
+    /// DATA not at the next offset (the NAK says which).
+    OutOfOrder = 5,
+    /// DATA past the announced length, or a misaligned chunk.
+    BadChunk = 6,
+    /// COMMIT before every byte arrived.
+    Incomplete = 7,
+    /// The written image's CRC is not the announced one.
+    Crc = 8,
+    /// The image does not validate.
+    Invalid = 9,
+    /// The flash refused an erase, a program or a read.
+    Flash = 10,
+    /// An update was committed: the next one waits for the reset that activates it.
+    RebootPending = 11,
+}
+
+impl Reason {
+    /// The reason of a code byte (`Malformed` for an unknown one).
+    pub const fn from_u8(b: u8) -> Self {
+        match b {
+            0 => Self::Ok,
+            2 => Self::NotStarted,
+            3 => Self::Busy,
+            4 => Self::TooLarge,
+            5 => Self::OutOfOrder,
+            6 => Self::BadChunk,
+            7 => Self::Incomplete,
+            8 => Self::Crc,
+            9 => Self::Invalid,
+            10 => Self::Flash,
+            11 => Self::RebootPending,
+            _ => Self::Malformed,
+        }
+    }
+
+    /// A short description.
+    pub const fn describe(self) -> &'static str {
+        match self {
+            Self::Ok => "ok",
+            Self::Malformed => "malformed request",
+            Self::NotStarted => "no update in progress",
+            Self::Busy => "another update is in progress",
+            Self::TooLarge => "image larger than a slot",
+            Self::OutOfOrder => "chunk out of order",
+            Self::BadChunk => "chunk past the end or misaligned",
+            Self::Incomplete => "commit before all data",
+            Self::Crc => "image CRC mismatch after writing",
+            Self::Invalid => "image does not validate",
+            Self::Flash => "flash error",
+            Self::RebootPending => "an update is committed; reset the unit first",
+        }
+    }
+}
+
+impl core::fmt::Display for Reason {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.describe())
+    }
+}
+
+/// A decoded frame; the payload borrows from the decoder (or the caller's bytes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Packet<'a> {
+    /// The kind.
+    pub kind: Kind,
+    /// The sequence number.
+    pub seq: u16,
+    /// The payload.
+    pub payload: &'a [u8],
+}
+
+impl Packet<'_> {
+    /// Encodes into `out`, returning the length, or `None` when the payload is too long or `out`
+    /// too short.
+    pub fn encode(&self, out: &mut [u8]) -> Option<usize> {
+        let len = self.payload.len();
+        if len > MAX_PAYLOAD {
+            return None;
+        }
+        let total = HEADER_LEN + len + 4;
+        let frame = out.get_mut(..total)?;
+        let (head, rest) = frame.split_at_mut(HEADER_LEN);
+        let (body, crc_out) = rest.split_at_mut(len);
+        head.copy_from_slice(&[
+            SYNC[0],
+            SYNC[1],
+            self.kind as u8,
+            self.seq.to_le_bytes()[0],
+            self.seq.to_le_bytes()[1],
+            (len as u16).to_le_bytes()[0],
+            (len as u16).to_le_bytes()[1],
+        ]);
+        body.copy_from_slice(self.payload);
+        let mut crc = Crc32::new();
+        crc.update(head.get(2..).unwrap_or(&[]));
+        crc.update(body);
+        crc_out.copy_from_slice(&crc.finish().to_le_bytes());
+        Some(total)
+    }
+
+    /// The little-endian u32 at `at` of the payload.
+    pub fn u32_at(&self, at: usize) -> Option<u32> {
+        let b: [u8; 4] = self.payload.get(at..at.checked_add(4)?)?.try_into().ok()?;
+        Some(u32::from_le_bytes(b))
+    }
+}
+
+/// What the start of the decoder's buffer holds.
+enum Candidate {
+    Incomplete,
+    NoFrame,
+    Good(usize),
+}
+
+/// Byte-at-a-time decoder with one frame of buffer.
+#[derive(Clone, Debug)]
+pub struct Decoder {
+    buf: [u8; MAX_FRAME],
+    len: usize,
+    /// Bytes of a frame handed out and still in the buffer (dropped at the next call).
+    ready: usize,
+    skipped: u32,
+}
+
+impl Default for Decoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Decoder {
+    /// A decoder that has seen nothing.
+    pub const fn new() -> Self {
+        Self {
+            buf: [0; MAX_FRAME],
+            len: 0,
+            ready: 0,
+            skipped: 0,
+        }
+    }
+
+    /// Bytes dropped while searching for a frame (garbage, other frames, corrupt frames).
+    pub const fn skipped(&self) -> u32 {
+        self.skipped
+    }
+
+    /// Feeds one byte; returns a frame if one is complete. Call [`poll`](Self::poll) until `None`
+    /// before the next byte (a resynchronisation can leave a second frame buffered).
+    pub fn push(&mut self, byte: u8) -> Option<Packet<'_>> {
+        self.release();
+        if self.len >= self.buf.len() {
+            self.drop_front(1);
+            self.skipped += 1;
+        }
+        if let Some(slot) = self.buf.get_mut(self.len) {
+            *slot = byte;
+            self.len += 1;
+        }
+        self.poll()
+    }
+
+    /// Looks for a complete frame in the bytes already fed.
+    pub fn poll(&mut self) -> Option<Packet<'_>> {
+        self.release();
+        loop {
+            match self.candidate() {
+                Candidate::Incomplete => return None,
+                Candidate::NoFrame => {
+                    self.drop_front(1);
+                    self.skipped += 1;
+                }
+                Candidate::Good(len) => {
+                    self.ready = len;
+                    let frame = self.buf.get(..len)?;
+                    return parse_good(frame);
+                }
+            }
+        }
+    }
+
+    fn release(&mut self) {
+        if self.ready > 0 {
+            self.drop_front(self.ready);
+            self.ready = 0;
+        }
+    }
+
+    fn candidate(&self) -> Candidate {
+        let bytes = self.buf.get(..self.len).unwrap_or(&[]);
+        for (i, s) in SYNC.iter().enumerate() {
+            match bytes.get(i) {
+                None => return Candidate::Incomplete,
+                Some(b) if b != s => return Candidate::NoFrame,
+                Some(_) => {}
+            }
+        }
+        let Some(head) = bytes.get(..HEADER_LEN) else {
+            return Candidate::Incomplete;
+        };
+        let kind = head.get(2).copied().and_then(Kind::from_u8);
+        let len = usize::from(u16::from_le_bytes([
+            head.get(5).copied().unwrap_or(0xFF),
+            head.get(6).copied().unwrap_or(0xFF),
+        ]));
+        if kind.is_none() || len > MAX_PAYLOAD {
+            return Candidate::NoFrame;
+        }
+        let total = HEADER_LEN + len + 4;
+        let Some(frame) = bytes.get(..total) else {
+            return Candidate::Incomplete;
+        };
+        let mut crc = Crc32::new();
+        crc.update(frame.get(2..total - 4).unwrap_or(&[]));
+        let sent = frame
+            .get(total - 4..)
+            .and_then(|b| <[u8; 4]>::try_from(b).ok())
+            .map(u32::from_le_bytes);
+        if sent == Some(crc.finish()) {
+            Candidate::Good(total)
+        } else {
+            Candidate::NoFrame
+        }
+    }
+
+    fn drop_front(&mut self, n: usize) {
+        let n = n.min(self.len);
+        self.buf.copy_within(n..self.len, 0);
+        self.len -= n;
+    }
+}
+
+/// The packet of a frame whose sync, kind, length and CRC were checked.
+fn parse_good(frame: &[u8]) -> Option<Packet<'_>> {
+    let kind = Kind::from_u8(*frame.get(2)?)?;
+    let seq = u16::from_le_bytes([*frame.get(3)?, *frame.get(4)?]);
+    let payload = frame.get(HEADER_LEN..frame.len().checked_sub(4)?)?;
+    Some(Packet { kind, seq, payload })
+}

@@ -1,0 +1,58 @@
+//! The update task: bytes from the serial link in, replies out, the inactive slot written — run
+//! below the sample loop's priority (QEMU: polled from `main`'s idle loop while the timer
+//! interrupt runs the loop; a board: a task below the sample task), so the loop never waits for
+//! it.
+//!
+//! It is the core's [`Receiver`] behind the core's frame [`Decoder`]: one protocol frame of
+//! receive buffer (75 B), and the reply encoded into a buffer of one reply frame.
+
+use embedded_storage::nor_flash::NorFlash;
+use tcomp_core::slots::{Active, Layout, SlotId};
+use tcomp_core::update::wire::{HEADER_LEN, MAX_SERIAL};
+use tcomp_core::update::{Decoder, Receiver};
+
+/// The longest reply frame (INFO with the longest serial).
+pub const MAX_REPLY: usize = HEADER_LEN + 9 + MAX_SERIAL + 4;
+
+/// The update task's state.
+#[derive(Clone, Debug)]
+pub struct UpdateTask {
+    decoder: Decoder,
+    receiver: Receiver,
+}
+
+impl UpdateTask {
+    /// A task for `layout`, running from `active` (the boot's choice).
+    pub const fn new(layout: Layout, active: Option<Active>) -> Self {
+        Self {
+            decoder: Decoder::new(),
+            receiver: Receiver::new(layout, active),
+        }
+    }
+
+    /// Feeds one received byte; when it completes a request, handles it and encodes the reply into
+    /// `reply`, returning its length. `serial` is the unit's serial number; `validate(flash,
+    /// offset, len)` says whether the written slot holds a readable image.
+    pub fn push<F: NorFlash>(
+        &mut self,
+        byte: u8,
+        flash: &mut F,
+        serial: &[u8],
+        validate: impl FnOnce(&mut F, u32, u32) -> bool,
+        reply: &mut [u8; MAX_REPLY],
+    ) -> Option<usize> {
+        let request = self.decoder.push(byte)?;
+        let answer = self.receiver.handle(flash, &request, serial, validate);
+        answer.packet().encode(reply)
+    }
+
+    /// The slot and generation committed, if an update has been (it runs from the next boot).
+    pub const fn committed(&self) -> Option<(SlotId, u32)> {
+        self.receiver.committed()
+    }
+
+    /// True while an image is being received.
+    pub const fn is_receiving(&self) -> bool {
+        self.receiver.is_receiving()
+    }
+}

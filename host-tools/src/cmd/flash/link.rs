@@ -1,0 +1,109 @@
+//! The update over any byte link (`Read + Write`): a serial port for `tcomp flash`, a pair of pipes
+//! in the tests. Requests go out one at a time; the bytes that come back are fed to two decoders,
+//! the update replies' and the output frames', each skipping the other's frames as garbage.
+
+use std::io::{ErrorKind, Read, Write};
+use std::time::{Duration, Instant};
+use tcomp_core::frame;
+use tcomp_core::update::wire::{Decoder, MAX_FRAME};
+use tcomp_core::update::{Info, Sender, Status};
+
+/// What an update did.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// How it ended.
+    pub status: Status,
+    /// The unit's INFO.
+    pub info: Option<Info>,
+    /// Requests sent again.
+    pub repeats: u32,
+    /// The unit's output frames seen meanwhile.
+    pub output: frame::Stats,
+    /// Their first and last sequence numbers.
+    pub first_sequence: Option<u32>,
+    /// See `first_sequence`.
+    pub last_sequence: Option<u32>,
+}
+
+/// Sends `image` and waits for each reply up to `timeout`; `progress(sent, total)` after each ACK.
+/// The output frames are counted from the unit's first reply (INFO) to its last: what came before
+/// is not part of the update (and a port opened a moment ago may have passed it through a line
+/// discipline that was not raw yet).
+pub fn transfer<L: Read + Write>(
+    link: &mut L,
+    image: &[u8],
+    timeout: Duration,
+    mut progress: impl FnMut(u32, u32),
+) -> std::io::Result<Outcome> {
+    let mut tx = Sender::new(image);
+    let mut replies = Decoder::new();
+    let mut outputs = frame::Decoder::new();
+    let (mut first, mut last) = (None, None);
+    let mut request = [0u8; MAX_FRAME];
+    let mut buf = [0u8; 4096];
+    while let Some(n) = tx.request(&mut request) {
+        // A link whose other end is not there (yet) — a pty before QEMU reads it, a port mid-reset —
+        // loses this request like a noisy line would: the timeout sends it again.
+        match link
+            .write_all(request.get(..n).unwrap_or(&[]))
+            .and_then(|()| link.flush())
+        {
+            Err(e) if e.kind() != ErrorKind::BrokenPipe => return Err(e),
+            _ => {}
+        }
+        let seq = tx.seq();
+        let deadline = Instant::now() + timeout;
+        let answered = loop {
+            let got = match link.read(&mut buf) {
+                Ok(0) => 0,
+                Ok(k) => k,
+                Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => 0,
+                Err(e) if e.kind() == ErrorKind::Interrupted => 0,
+                Err(e) if e.kind() == ErrorKind::BrokenPipe => {
+                    std::thread::sleep(Duration::from_millis(10));
+                    0
+                }
+                Err(e) => return Err(e),
+            };
+            for &b in buf.get(..got).unwrap_or(&[]) {
+                // Counted from the unit's first reply on: the update's span.
+                let counting = tx.info().is_some();
+                outputs.feed(&[b], |f| {
+                    if counting {
+                        first.get_or_insert(f.sequence);
+                        last = Some(f.sequence);
+                    }
+                });
+                if !counting {
+                    outputs = frame::Decoder::new();
+                }
+                if let Some(p) = replies.push(b) {
+                    tx.on_reply(&p);
+                }
+                while let Some(p) = replies.poll() {
+                    tx.on_reply(&p);
+                }
+            }
+            if tx.seq() != seq || !matches!(tx.status(), Status::Running { .. }) {
+                break true;
+            }
+            if Instant::now() >= deadline {
+                break false;
+            }
+        };
+        if !answered {
+            tx.on_timeout();
+        }
+        if let Status::Running { sent } = tx.status() {
+            progress(sent, tx.len());
+        }
+    }
+    Ok(Outcome {
+        status: tx.status(),
+        info: tx.info(),
+        repeats: tx.repeats(),
+        output: outputs.stats(),
+        first_sequence: first,
+        last_sequence: last,
+    })
+}
