@@ -57,9 +57,12 @@ impl OwnedModel {
         let program = self.spec.program()?;
         let mut ranges = heapless::Vec::new();
         for r in &self.ranges {
-            ranges
-                .push(*r)
-                .map_err(|_| TrainError::Invalid("too many feature ranges".into()))?;
+            ranges.push(*r).map_err(|_| TrainError::OverCapacity {
+                features: self.ranges.len(),
+                max_features: F,
+                centers: 0,
+                max_centers: C,
+            })?;
         }
         let meta = Meta {
             sensor: self.sensor,

@@ -216,9 +216,23 @@ pub enum TrainError {
         /// What failed.
         what: &'static str,
     },
-    /// A numerical failure or a capacity exceeded inside the model's construction.
-    #[error("{0}")]
-    Invalid(String),
+    /// The fitted model is larger than the host model's capacities ([`tcomp_core::HostModel`]).
+    #[error(
+        "model size out of capacity: {features} features (max {max_features}), {centers} centers (max {max_centers})"
+    )]
+    OverCapacity {
+        /// Features of the fitted model.
+        features: usize,
+        /// Most features the host model holds.
+        max_features: usize,
+        /// Centers of the fitted model.
+        centers: usize,
+        /// Most centers the host model holds.
+        max_centers: usize,
+    },
+    /// The least-squares solve failed (nalgebra's SVD reports why).
+    #[error("least squares failed: {0}")]
+    LeastSquares(&'static str),
 }
 
 /// A fit refused for its memory: what it would have needed and what to do instead.

@@ -14,20 +14,14 @@ use tcomp_core::SensorKind;
 
 /// Parses a sensor kind name (rlg, qma, ifog, mems-gyro, mems-accel, other).
 pub fn parse_sensor(s: &str) -> Result<SensorKind, TrainError> {
-    Ok(match s {
-        "rlg" => SensorKind::Rlg,
-        "qma" => SensorKind::Qma,
-        "ifog" => SensorKind::Ifog,
-        "mems-gyro" => SensorKind::MemsGyro,
-        "mems-accel" => SensorKind::MemsAccel,
-        "other" => SensorKind::Other,
-        _ => {
-            return Err(TrainError::Unknown {
-                what: "sensor",
-                name: s.into(),
-                known: "rlg, qma, ifog, mems-gyro, mems-accel, other".into(),
-            });
-        }
+    SensorKind::from_name(s).ok_or_else(|| TrainError::Unknown {
+        what: "sensor",
+        name: s.into(),
+        known: SensorKind::ALL
+            .iter()
+            .map(|k| k.name())
+            .collect::<Vec<_>>()
+            .join(", "),
     })
 }
 

@@ -15,8 +15,8 @@ use crate::features::{self, FeatureSpec};
 use crate::method::{FitMethod, MethodDetails, MethodFit, TrainingSet};
 use crate::progress::Progress;
 use crate::rbf64::{Rbf64, design, least_squares, mean_std, normalise_rows, split_weights};
-use tcomp_core::expr::{self, Expr};
 use crate::train::FitOptions;
+use tcomp_core::expr::{self, Expr};
 
 /// Name of the clamped-temperature signal poly3 defines.
 pub const SIGNAL: &str = "Tclamped";

@@ -61,10 +61,7 @@ impl Rbf64 {
     pub fn to_core(&self) -> Result<Rbf<C, F>, TrainError> {
         let nf = self.offset.len();
         if nf == 0 || nf > F || self.centers.len() > C {
-            return Err(TrainError::Invalid(format!(
-                "model size out of capacity: {nf} features (max {F}), {} centers (max {C})",
-                self.centers.len()
-            )));
+            return Err(self.over_capacity());
         }
         let p =
             |v: &[f64]| Point::<F>::from_slice(&v.iter().map(|&x| x as f32).collect::<Vec<_>>());
@@ -77,12 +74,20 @@ impl Rbf64 {
             ..Rbf::default()
         };
         for ((c, g), w) in self.centers.iter().zip(&self.gamma).zip(&self.weights) {
-            let overflow = || TrainError::Invalid("too many centers".into());
             rbf.centers
                 .push(Center::from_natural(c, *g, *w))
-                .map_err(|_| overflow())?;
+                .map_err(|_| self.over_capacity())?;
         }
         Ok(rbf)
+    }
+
+    fn over_capacity(&self) -> TrainError {
+        TrainError::OverCapacity {
+            features: self.offset.len(),
+            max_features: F,
+            centers: self.centers.len(),
+            max_centers: C,
+        }
     }
 }
 
@@ -157,9 +162,7 @@ pub fn least_squares(phi: &DMatrix<f64>, y: &[f64]) -> Result<Vec<f64>, TrainErr
     let yv = nalgebra::DVector::from_column_slice(y);
     let svd = phi.clone().svd(true, true);
     let eps = svd.singular_values.max() * 1e-10;
-    let w = svd
-        .solve(&yv, eps)
-        .map_err(|e| TrainError::Invalid(format!("least squares failed: {e}")))?;
+    let w = svd.solve(&yv, eps).map_err(TrainError::LeastSquares)?;
     Ok(w.iter().copied().collect())
 }
 

@@ -64,13 +64,14 @@ pub(super) fn fit_before(
         .first()
         .cloned()
         .unwrap_or_else(|| "t_coil_c".into());
-    let features = vec![temp.clone(), format!("rate({temp})")];
+    let rate = tcomp_core::expr::rate(tcomp_core::expr::name(&temp)).to_string();
+    let features = vec![temp.clone(), rate.clone()];
     let fitted = tcomp_demo::fit_features(&sim.train, &sim.train_truth, &[], &features)?;
     let path = opts.out.join("before.tcm");
     tcomp_train::blob_io::write_atomic(&path, &fitted.model.to_bytes()?)?;
     let eval = tcomp_demo::evaluate(&fitted, &sim.verify)?;
     story.tell(&format!(
-        "2. Fitting the traditional model on (T, dT/dt): --feature {temp} --feature 'rate({temp})'.\n   \
+        "2. Fitting the traditional model on (T, dT/dt): --feature {temp} --feature '{rate}'.\n   \
          Training residual (100 s bins): {:.4} {unit}. On the verification run: {:.4} {unit} — \
          {:.1}× the noise floor of {:.4} {unit}.",
         fitted.summary.train.binned.residual_std,
