@@ -26,6 +26,7 @@ pub mod fit;
 pub mod frames;
 pub mod image;
 pub mod inspect;
+mod inspect_image;
 mod output;
 mod printable;
 mod progress;
