@@ -25,7 +25,7 @@
 //! * a channel whose blob is missing, corrupt or reads inputs it is not wired to runs with
 //!   `NO_MODEL`: raw value passed through, flagged.
 
-use crate::image::{Image, ImageError};
+use crate::image::{Image, ImageError, TableError, check_table};
 use tcomp_core::frame::{ChannelOutput, Frame, MAX_CHANNELS as FRAME_CHANNELS};
 use tcomp_core::{BlobError, Channel, MAX_INPUTS, Model};
 use tcomp_hal::scale::ChannelScale;
@@ -159,10 +159,11 @@ pub const IMU6: [ChannelConfig; 6] = [
     qma(5, "qma-z", &[("t_qma_c", 11)], 5),
 ];
 
-/// A single fiber-optic gyro with its coil thermometer (channel id 6).
+/// A single fiber-optic gyro with its coil thermometer: channel 0 (`ifog-x`) of the IFOG triad's
+/// board description (`firmware/descriptions/ifog3.toml`), whose image the QEMU run loads.
 pub const IFOG1: [ChannelConfig; 1] = [ChannelConfig {
-    id: 6,
-    name: "ifog",
+    id: 0,
+    name: "ifog-x",
     thermometers: &[("t_coil_c", 0)],
     counter: 0,
     scale: ChannelScale::rlg_arcsec_per_pulse(RLG_ARCSEC_PER_PULSE),
@@ -172,12 +173,36 @@ pub const IFOG1: [ChannelConfig; 1] = [ChannelConfig {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(target_os = "none", derive(defmt::Format))]
 pub enum LoadError {
-    /// The image, or this channel's entry in it.
+    /// The image, or this channel's entry in it (an image made for another unit included).
     Image(ImageError),
     /// The blob was rejected by `Model::decode`.
     Blob(BlobError),
     /// The model reads an input column this channel has no thermometer for.
     Unwired,
+    /// The image's channel table cannot run on this board (see [`crate::image::check_table`]).
+    Table(TableError),
+    /// The image's table has no row for this channel.
+    NotInTable,
+    /// The blob's sensor kind, axis, unit or inputs are not its row's: an entry that points at
+    /// another channel's (valid) blob.
+    WrongChannel,
+}
+
+impl LoadError {
+    /// A one-byte code for the boot report: 0 loaded, then one per reason.
+    pub fn code(r: &Result<(), LoadError>) -> u8 {
+        match r {
+            Ok(()) => 0,
+            Err(Self::Image(ImageError::Missing)) => 1,
+            Err(Self::Image(ImageError::OtherUnit { .. })) => 2,
+            Err(Self::Image(_)) => 3,
+            Err(Self::Blob(_)) => 4,
+            Err(Self::Unwired) => 5,
+            Err(Self::Table(_)) => 6,
+            Err(Self::NotInTable) => 7,
+            Err(Self::WrongChannel) => 8,
+        }
+    }
 }
 
 /// One output of one channel.
@@ -290,11 +315,40 @@ impl<'a> App<'a> {
     }
 
     /// Loads every channel's model from the image bytes; returns each channel's outcome. A channel
-    /// that fails keeps running without a model.
+    /// that fails keeps running without a model. No unit check: see [`App::load_for_unit`].
     pub fn load(&mut self, image: &'a [u8]) -> [Result<(), LoadError>; MAX_CHANNELS] {
-        let image = Image::parse(image);
+        self.load_checked(Image::parse(image), MAX_COUNTERS, MAX_THERMOMETERS)
+    }
+
+    /// [`App::load`] for the unit with serial `unit_serial` on a board with `counters` counter (or
+    /// sample) channels and `thermometers` converters: an image made for another unit, or whose
+    /// channel table the board cannot run, loads no model at all (every channel says why).
+    pub fn load_for_unit(
+        &mut self,
+        image: &'a [u8],
+        unit_serial: u64,
+        counters: usize,
+        thermometers: usize,
+    ) -> [Result<(), LoadError>; MAX_CHANNELS] {
+        let image = Image::parse(image).and_then(|i| i.check_unit(unit_serial).map(|()| i));
+        self.load_checked(image, counters, thermometers)
+    }
+
+    fn load_checked(
+        &mut self,
+        image: Result<Image<'a>, ImageError>,
+        counters: usize,
+        thermometers: usize,
+    ) -> [Result<(), LoadError>; MAX_CHANNELS] {
+        let table = match &image {
+            Ok(i) => check_table(i, self.config, counters, thermometers),
+            Err(_) => Ok(()),
+        };
         core::array::from_fn(|k| {
-            let loaded = self.load_channel(k, image);
+            let loaded = match table {
+                Err(e) if k < self.config.len() => Err(LoadError::Table(e)),
+                _ => self.load_channel(k, image),
+            };
             if let (Err(_), Some(m)) = (&loaded, self.models.get_mut(k)) {
                 *m = None;
             }
@@ -313,9 +367,19 @@ impl<'a> App<'a> {
         let blob = image
             .and_then(|i| i.blob(cfg.id))
             .map_err(LoadError::Image)?;
+        let row = match image {
+            Ok(i) if i.version() >= crate::image::VERSION_2 => {
+                Some(i.channel_by_id(cfg.id).ok_or(LoadError::NotInTable)?)
+            }
+            _ => None,
+        };
         let slot = self.models.get_mut(k).ok_or(LoadError::Unwired)?;
         decode_into(slot, blob).map_err(LoadError::Blob)?;
         let model = slot.as_ref().ok_or(LoadError::Unwired)?;
+        if let Some(row) = row {
+            row.accepts(&model.meta, model.program.inputs.iter().map(|s| &**s))
+                .map_err(|_| LoadError::WrongChannel)?;
+        }
         let map = self.input_map.get_mut(k).ok_or(LoadError::Unwired)?;
         for (slot, name) in map.iter_mut().zip(model.program.inputs.iter()) {
             let (_, t) = cfg
@@ -583,3 +647,7 @@ pub fn plausible_interval(latched: f32, periods: u16) -> bool {
 #[cfg(test)]
 #[path = "app_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "load_tests.rs"]
+mod load_tests;

@@ -35,7 +35,8 @@ use tcomp_core::frame::MAX_FRAME_LEN;
 use tcomp_firmware::app::{App, ChannelConfig, IFOG1, IMU6, MAX_CHANNELS, Record, status};
 use tcomp_firmware::fault::{FaultKind, FaultRecord};
 use tcomp_firmware::replay::{
-    Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, Vector,
+    Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, UNIT_SERIAL,
+    Vector,
 };
 use tcomp_firmware::timing::TimeCheck;
 use tcomp_firmware::{
@@ -362,7 +363,8 @@ fn main() -> ! {
         vector.counters
     );
     app.reset(config);
-    for (cfg, r) in config.iter().zip(app.load(image).iter()) {
+    let loaded = app.load_for_unit(image, UNIT_SERIAL, vector.counters, vector.thermometers);
+    for (cfg, r) in config.iter().zip(loaded.iter()) {
         if let Err(e) = r {
             defmt::warn!(
                 "channel {=str}: no model ({}), raw passed through",

@@ -74,28 +74,44 @@ fn fit_models(work: &Path) -> Result<()> {
     ];
     for (preset, target, reference, signal, features) in fits {
         tcomp(work, &["simulate", "--preset", preset, "--out", preset])?;
-        let data = format!("{preset}/train.csv");
-        let out = format!("{preset}.tcm");
-        let mut args = vec![
-            "fit",
-            "--data",
-            &data,
-            "--target",
-            target,
-            "--reference",
-            reference,
-            "--signal",
-            signal,
-            "--centers",
-            "32",
-            "--out",
-            &out,
-            "--quiet",
-        ];
-        for f in &features {
-            args.extend_from_slice(&["--feature", f]);
+        // One blob per channel: the numbers are the preset's, the metadata (sensor kind, axis,
+        // unit) the channel's row in the board description, which `tcomp image --board` and the
+        // firmware check each blob against.
+        let (sensor, unit, axes): (&str, &str, &[&str]) = match preset {
+            "rlg" => ("rlg", "deg/h", &["x", "y", "z"]),
+            "qma" => ("qma", "ug", &["x", "y", "z"]),
+            _ => ("ifog", "deg/h", &["x"]),
+        };
+        for axis in axes {
+            let data = format!("{preset}/train.csv");
+            let out = format!("{preset}-{axis}.tcm");
+            let mut args = vec![
+                "fit",
+                "--data",
+                &data,
+                "--target",
+                target,
+                "--reference",
+                reference,
+                "--signal",
+                signal,
+                "--centers",
+                "32",
+                "--sensor",
+                sensor,
+                "--axis",
+                axis,
+                "--unit",
+                unit,
+                "--out",
+                &out,
+                "--quiet",
+            ];
+            for f in &features {
+                args.extend_from_slice(&["--feature", f]);
+            }
+            tcomp(work, &args)?;
         }
-        tcomp(work, &args)?;
     }
     Ok(())
 }
@@ -274,21 +290,54 @@ pub fn qemu() -> Result<()> {
             ],
         )?;
     }
-    let mut model_args = vec!["image".to_string()];
-    for (id, m) in ["rlg", "rlg", "rlg", "qma", "qma", "qma", "ifog-shupe"]
+    // The images, made as a user makes them: the shipped board descriptions, the unit serial the
+    // replay board reports, a pinned creation time so the bytes are reproducible.
+    let serial = tcomp_firmware::replay::UNIT_SERIAL.to_string();
+    let descriptions = root.join("firmware/descriptions");
+    let imu6_board = descriptions.join("imu6-rlg-qma.toml");
+    let ifog_board = descriptions.join("ifog3.toml");
+    let mut model_args: Vec<String> = vec!["image".into(), "--board".into()];
+    model_args.push(imu6_board.to_str().context("path")?.into());
+    for (id, m) in ["rlg-x", "rlg-y", "rlg-z", "qma-x", "qma-y", "qma-z"]
         .iter()
         .enumerate()
     {
         model_args.extend(["--model".into(), format!("{id}={m}.tcm")]);
     }
+    model_args.extend([
+        "--serial".into(),
+        serial.clone(),
+        "--created".into(),
+        "0".into(),
+    ]);
     model_args.extend(["--out".into(), "models.bin".into()]);
     tcomp(
         &work,
         &model_args.iter().map(String::as_str).collect::<Vec<_>>(),
     )?;
+    let ifog_board = ifog_board.to_str().context("path")?;
+    tcomp(
+        &work,
+        &[
+            "image",
+            "--board",
+            ifog_board,
+            "--model",
+            "0=ifog-shupe-x.tcm",
+            "--serial",
+            &serial,
+            "--created",
+            "0",
+            "--out",
+            "models-ifog.bin",
+        ],
+    )?;
     let image = std::fs::read(work.join("models.bin"))?;
+    let ifog_image = std::fs::read(work.join("models-ifog.bin"))?;
 
-    // A second image with QMA z's blob corrupted: one flipped byte in its middle.
+    // A second image with QMA z's blob corrupted: one flipped byte in its middle, the image
+    // re-sealed (its whole-image CRC recomputed), so that the blob's own CRC is what refuses it
+    // and only that channel runs without a model.
     let mut corrupt = image.clone();
     let table = Image::parse(&image).map_err(|e| anyhow::anyhow!("image: {e:?}"))?;
     let (_, blob) = table
@@ -296,6 +345,7 @@ pub fn qemu() -> Result<()> {
         .map_err(|e| anyhow::anyhow!("image: {e:?}"))?;
     let at = blob.as_ptr() as usize - image.as_ptr() as usize + blob.len() / 2;
     corrupt[at] ^= 0x10;
+    tcomp_core::image::seal(&mut corrupt).map_err(|e| anyhow::anyhow!("image: {e:?}"))?;
     std::fs::write(work.join("models-corrupt.bin"), &corrupt)?;
 
     // IMU6 vector: three RLG axes from one 200 Hz slice (offset rows), three QMA axes likewise.
@@ -379,7 +429,7 @@ pub fn qemu() -> Result<()> {
     for n in 5000..5003 {
         ifog_in.therm_faults[0][n] = true;
     }
-    let c = build(CONFIG_IFOG1, &IFOG1, &ifog_in, &image)?;
+    let c = build(CONFIG_IFOG1, &IFOG1, &ifog_in, &ifog_image)?;
 
     let fault = status::SENSOR_ERROR | status::INPUT_FAULT;
     let sa = &a.statuses;
@@ -515,7 +565,7 @@ pub fn qemu() -> Result<()> {
         (
             "ifog1",
             &c.bytes,
-            "models.bin",
+            "models-ifog.bin",
             c.hash,
             &c.frames,
             &c.served,

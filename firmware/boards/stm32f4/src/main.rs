@@ -38,6 +38,27 @@ fn models_image() -> &'static [u8] {
     unsafe { core::slice::from_raw_parts(start, len) }
 }
 
+/// Start of the STM32F4's one-time-programmable area (RM0090 §3.8: 512 bytes in 16 blocks of
+/// 32 bytes, and a lock byte per block at 0x1FFF_7A00). Block 0's first 8 bytes hold the unit
+/// serial, programmed once at manufacturing and then locked: unlike the factory's 96-bit device
+/// id (0x1FFF_7A10), it is the number on the unit's label, which `tcomp image --serial` takes; and
+/// OTP survives every firmware and image update, so an image cannot be moved to another unit by
+/// reflashing it.
+const OTP_SERIAL: usize = 0x1FFF_7800;
+
+/// The unit's serial (little-endian u64 at [`OTP_SERIAL`]); all ones on a unit whose OTP was never
+/// programmed, which no image names, so such a unit runs every channel with `NO_MODEL` and its
+/// boot report says "image made for another unit".
+pub fn unit_serial() -> u64 {
+    let mut b = [0u8; 8];
+    for (i, byte) in b.iter_mut().enumerate() {
+        // SAFETY: the OTP area is always mapped and readable on the STM32F405/407; reading it has
+        // no side effect.
+        *byte = unsafe { core::ptr::read_volatile((OTP_SERIAL + i) as *const u8) };
+    }
+    u64::from_le_bytes(b)
+}
+
 /// Bytes the UART queue holds (511 usable): six 84-byte six-channel frames. At 921,600
 /// baud one frame takes 0.9 ms, so the queue never fills unless the line is stalled.
 const TX_QUEUE: usize = 512;
@@ -102,7 +123,12 @@ mod app {
             );
         }
         let app = cx.local.app_state;
-        let loaded = app.load(crate::models_image());
+        let loaded = app.load_for_unit(
+            crate::models_image(),
+            crate::unit_serial(),
+            tcomp_firmware::app::MAX_COUNTERS,
+            crate::setup::THERMOMETERS,
+        );
         for (cfg, r) in IMU6.iter().zip(loaded.iter()) {
             match r {
                 Ok(()) => defmt::info!("channel {=str}: model loaded", cfg.name),
