@@ -31,8 +31,10 @@ use cortex_m::interrupt::{InterruptNumber, Mutex};
 use cortex_m::peripheral::NVIC;
 use cortex_m_rt::{ExceptionFrame, entry, exception};
 use defmt_semihosting as _;
+use tcomp_core::frame::BootReport;
 use tcomp_core::frame::MAX_FRAME_LEN;
 use tcomp_firmware::app::{App, ChannelConfig, IFOG1, IMU6, MAX_CHANNELS, Record, status};
+use tcomp_firmware::boot::REPORT_PERIODS;
 use tcomp_firmware::fault::{FaultKind, FaultRecord};
 use tcomp_firmware::replay::{
     Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, UNIT_SERIAL,
@@ -155,6 +157,23 @@ struct Loop {
     last_entry: u32,
     /// The first frame of this boot carries the reset cause.
     boot_flags: u16,
+    /// What this boot loaded, re-sent every `REPORT_PERIODS` samples.
+    report: BootReport,
+}
+
+impl Loop {
+    /// Sends the boot report, stamped with the next data frame's sequence number.
+    fn send_report(&mut self, sequence: u32) {
+        self.report.sequence = sequence;
+        send_report(&self.uart, &self.report);
+    }
+}
+
+fn send_report(uart: &Uart, report: &BootReport) {
+    let mut bytes = [0u8; MAX_FRAME_LEN];
+    if let Some(len) = report.encode(&mut bytes) {
+        uart.write_all(bytes.get(..len).unwrap_or(&[]));
+    }
 }
 
 impl Loop {
@@ -234,6 +253,10 @@ impl Loop {
         if let Ok(len) = frame.encode(&mut bytes) {
             self.uart.write_all(bytes.get(..len).unwrap_or(&[]));
         }
+        if (n as u32 + 1).is_multiple_of(REPORT_PERIODS) {
+            self.send_report(n as u32 + 1);
+        }
+        let r = &mut *self.run;
         r.samples += 1;
         r.next = n as u32 + 1;
         if injected & HANG != 0 {
@@ -364,6 +387,18 @@ fn main() -> ! {
     );
     app.reset(config);
     let loaded = app.load_for_unit(image, UNIT_SERIAL, vector.counters, vector.thermometers);
+    let mut report =
+        tcomp_firmware::boot::report(image, UNIT_SERIAL, config, &loaded, boot_flags != 0);
+    report.sequence = run.next;
+    defmt::info!(
+        "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
+        report.unit_serial,
+        report.image_version,
+        report.image_serial,
+        report.image_state,
+        report.board_hash,
+        report.image_crc
+    );
     for (cfg, r) in config.iter().zip(loaded.iter()) {
         if let Err(e) = r {
             defmt::warn!(
@@ -396,7 +431,9 @@ fn main() -> ! {
         edges: 0,
         last_entry: 0,
         boot_flags,
+        report,
     };
+    send_report(&state.uart, &state.report);
     cortex_m::interrupt::free(|cs| *LOOP.borrow(cs).borrow_mut() = Some(state));
     // SAFETY: the handler (DefaultHandler, IRQ 8) only takes LOOP inside a critical section.
     unsafe { NVIC::unmask(Irq(TIMER0_IRQ as u16)) };

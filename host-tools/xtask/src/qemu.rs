@@ -7,10 +7,13 @@ use crate::{TARGET, cargo, field};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use tcomp_core::frame::Decoder;
+use tcomp_core::frame::{BootReport, Decoder, Item, boot_len, image_state};
 use tcomp_firmware::app::{IFOG1, IMU6, PERIOD_S, status};
+use tcomp_firmware::boot::REPORT_PERIODS;
 use tcomp_firmware::image::Image;
-use tcomp_firmware::replay::{CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TIME_GLITCH};
+use tcomp_firmware::replay::{
+    CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TIME_GLITCH, UNIT_SERIAL,
+};
 
 /// Budgets, from the issue and the part. Instructions: the worst 6-channel sample with every model
 /// evaluated every sample (no stagger): 11,360 measured. Flash: an STM32F405/407 has 1 MiB, less
@@ -174,10 +177,14 @@ fn run_qemu(elf: &Path, image: &Path, vector: &Path, uart: &Path) -> Result<Stri
 /// Decodes every frame of the UART capture with the core's decoder and compares each with the
 /// host's frame of the same sequence number, byte for byte (values as f64 bits, status words with
 /// the board's bits, timestamps). Returns the frames decoded.
-fn compare_frames(capture: &[u8], expected: &[Vec<u8>]) -> Result<usize> {
+fn compare_frames(capture: &[u8], expected: &[Vec<u8>]) -> Result<(usize, Vec<BootReport>)> {
     let mut decoder = Decoder::new();
     let mut frames = Vec::new();
-    decoder.feed(capture, |f| frames.push(f));
+    let mut reports = Vec::new();
+    decoder.feed_items(capture, |i| match i {
+        Item::Data(f) => frames.push(f),
+        Item::Boot(r) => reports.push(r),
+    });
     let stats = decoder.stats();
     let mut mismatches = 0;
     let mut first = None;
@@ -201,14 +208,52 @@ fn compare_frames(capture: &[u8], expected: &[Vec<u8>]) -> Result<usize> {
             frames.len(),
         );
     }
-    let sent: usize = expected.iter().map(Vec::len).sum();
+    let reported: usize = reports.iter().map(|r| boot_len(r.channels().len())).sum();
+    let sent: usize = expected.iter().map(Vec::len).sum::<usize>() + reported;
     if capture.len() != sent {
         bail!(
-            "UART capture is {} B, the host's frames {sent} B",
+            "UART capture is {} B, the host's frames and the boot reports {sent} B",
             capture.len()
         );
     }
-    Ok(frames.len())
+    Ok((frames.len(), reports))
+}
+
+/// The boot reports of a run: one per boot (`boots`) plus one every `REPORT_PERIODS` served
+/// samples, each naming this unit, the image made for it, and per channel the load state the
+/// host's loop had (`states`); the report after a watchdog reset says so.
+fn check_reports(
+    reports: &[BootReport],
+    boots: usize,
+    served: &[bool],
+    states: &[u8],
+) -> Result<()> {
+    let periodic = served
+        .iter()
+        .enumerate()
+        .filter(|&(n, &s)| s && (n as u32 + 1).is_multiple_of(REPORT_PERIODS))
+        .count();
+    if reports.len() != boots + periodic {
+        bail!(
+            "{} boot reports, expected {boots} boots + {periodic} periodic",
+            reports.len()
+        );
+    }
+    for r in reports {
+        let got: Vec<u8> = r.channels().iter().map(|c| c.state).collect();
+        if r.unit_serial != UNIT_SERIAL
+            || r.image_serial != UNIT_SERIAL
+            || r.image_version != 2
+            || r.image_state != image_state::OK
+            || got != states
+        {
+            bail!("boot report {r:?}: expected unit {UNIT_SERIAL:#x}, image v2, states {states:?}");
+        }
+    }
+    if boots > 1 && !reports.iter().any(|r| r.flags & 1 != 0) {
+        bail!("no boot report says the watchdog reset the unit");
+    }
+    Ok(())
 }
 
 /// The firmware's summary numbers of one run.
@@ -579,8 +624,20 @@ pub fn qemu() -> Result<()> {
         let text = run_qemu(&elf, &work.join(image), &path, &uart)?;
         let s = check(&text, hash, served.iter().filter(|&&s| s).count())?;
         let capture = std::fs::read(&uart).with_context(|| format!("{}", uart.display()))?;
-        let n = compare_frames(&capture, expected)?;
+        let (n, reports) = compare_frames(&capture, expected)?;
         println!("{name}: {n} UART frames decoded, each identical to the host's");
+        let boots = if name.starts_with("imu6") { 2 } else { 1 };
+        // QMA z's corrupt blob: refused by its own CRC (LoadError::Blob, code 4).
+        let states: &[u8] = match name {
+            "imu6" => &[0; 6],
+            "imu6-corrupt-blob" => &[0, 0, 0, 0, 0, 4],
+            _ => &[0],
+        };
+        check_reports(&reports, boots, served, states)?;
+        println!(
+            "{name}: {} boot reports (unit {UNIT_SERIAL:#x}, image v2, every channel as loaded)",
+            reports.len()
+        );
         // Both IMU6 runs replay the same inputs: one stalled sample, one missed period (its
         // sample late too) and one hang each.
         let (want_late, want_missed, want_resets) = if name.starts_with("imu6") {
