@@ -159,8 +159,9 @@ pub const IMU6: [ChannelConfig; 6] = [
     qma(5, "qma-z", &[("t_qma_c", 11)], 5),
 ];
 
-/// A single fiber-optic gyro with its coil thermometer: channel 0 (`ifog-x`) of the IFOG triad's
-/// board description (`firmware/descriptions/ifog3.toml`), whose image the QEMU run loads.
+/// A single fiber-optic gyro with its coil thermometer: the board description
+/// `firmware/descriptions/ifog1.toml` (channel 0, `ifog-x`, as the triad's first channel), whose
+/// image the QEMU run loads.
 pub const IFOG1: [ChannelConfig; 1] = [ChannelConfig {
     id: 0,
     name: "ifog-x",

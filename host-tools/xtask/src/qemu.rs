@@ -340,7 +340,7 @@ pub fn qemu() -> Result<()> {
     let serial = tcomp_firmware::replay::UNIT_SERIAL.to_string();
     let descriptions = root.join("firmware/descriptions");
     let imu6_board = descriptions.join("imu6-rlg-qma.toml");
-    let ifog_board = descriptions.join("ifog3.toml");
+    let ifog_board = descriptions.join("ifog1.toml");
     let mut model_args: Vec<String> = vec!["image".into(), "--board".into()];
     model_args.push(imu6_board.to_str().context("path")?.into());
     for (id, m) in ["rlg-x", "rlg-y", "rlg-z", "qma-x", "qma-y", "qma-z"]
