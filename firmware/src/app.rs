@@ -195,7 +195,7 @@ impl LoadError {
         match r {
             Ok(()) => 0,
             Err(Self::Image(ImageError::Missing)) => 1,
-            Err(Self::Image(ImageError::OtherUnit { .. })) => 2,
+            Err(Self::Image(ImageError::OtherUnit)) => 2,
             Err(Self::Image(_)) => 3,
             Err(Self::Blob(_)) => 4,
             Err(Self::Unwired) => 5,
@@ -368,18 +368,12 @@ impl<'a> App<'a> {
         let blob = image
             .and_then(|i| i.blob(cfg.id))
             .map_err(LoadError::Image)?;
-        let row = match image {
-            Ok(i) if i.version() >= crate::image::VERSION_2 => {
-                Some(i.channel_by_id(cfg.id).ok_or(LoadError::NotInTable)?)
-            }
-            _ => None,
-        };
         let slot = self.models.get_mut(k).ok_or(LoadError::Unwired)?;
         decode_into(slot, blob).map_err(LoadError::Blob)?;
         let model = slot.as_ref().ok_or(LoadError::Unwired)?;
-        if let Some(row) = row {
-            row.accepts(&model.meta, model.program.inputs.iter().map(|s| &**s))
-                .map_err(|_| LoadError::WrongChannel)?;
+        // After the decode, so the row is not on the stack under the decoder's frame.
+        if let Ok(i) = image {
+            bound_to_row(&i, cfg.id, model)?;
         }
         let map = self.input_map.get_mut(k).ok_or(LoadError::Unwired)?;
         for (slot, name) in map.iter_mut().zip(model.program.inputs.iter()) {
@@ -619,6 +613,18 @@ impl<'a> App<'a> {
         f64::from(rec.counts) * f64::from(cfg.scale.per_pulse()) / interval
             - f64::from(rec.correction)
     }
+}
+
+/// Whether `model` belongs on channel `id`'s row of a version-2 `image` (a version-1 image has
+/// no rows: yes). Not inlined: the row is on the stack only for this check.
+#[inline(never)]
+fn bound_to_row(image: &Image<'_>, id: u16, model: &FwModel<'_>) -> Result<(), LoadError> {
+    if image.version() < crate::image::VERSION_2 {
+        return Ok(());
+    }
+    let row = image.channel_by_id(id).ok_or(LoadError::NotInTable)?;
+    row.accepts(&model.meta, model.program.inputs.iter().map(|s| &**s))
+        .map_err(|_| LoadError::WrongChannel)
 }
 
 /// Decodes `blob` into `slot` in place ([`Model::decode_into`]). Not inlined, so the decoder's

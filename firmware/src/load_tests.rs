@@ -128,10 +128,7 @@ fn each_blob_loads_on_its_own_row_and_the_unit_is_checked() {
     assert_eq!(LoadError::code(&r[0]), 0);
 
     let r = app.load_for_unit(&image, SERIAL + 1, MAX_COUNTERS, MAX_THERMOMETERS);
-    let other = Err(LoadError::Image(ImageError::OtherUnit {
-        image: SERIAL,
-        unit: SERIAL + 1,
-    }));
+    let other = Err(LoadError::Image(ImageError::OtherUnit));
     assert!(r.iter().all(|x| *x == other), "{r:?}");
     assert_eq!(crate::image::check_unit(&image, SERIAL), Ok(()));
     // No model runs after a refused load.

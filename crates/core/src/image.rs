@@ -134,13 +134,10 @@ pub enum ImageError {
     UnknownChannel(u16),
     /// The header's board hash is not the hash of the rows the image carries.
     BoardHash,
-    /// The image was made for another unit (its serial, the unit's own).
-    OtherUnit {
-        /// The serial in the image.
-        image: u64,
-        /// The unit's serial.
-        unit: u64,
-    },
+    /// The image was made for another unit. The serials are in the image's header and the
+    /// boot report; not carried here, so that the error stays as small as the others (the
+    /// firmware keeps one per channel on its boot stack).
+    OtherUnit,
 }
 
 impl core::fmt::Display for ImageError {
@@ -164,9 +161,7 @@ impl core::fmt::Display for ImageError {
             Self::BadRow => f.write_str("malformed row in the image's channel table"),
             Self::UnknownChannel(id) => write!(f, "channel {id} is not in the board's table"),
             Self::BoardHash => f.write_str("board hash does not match the image's table"),
-            Self::OtherUnit { image, unit } => {
-                write!(f, "image made for unit {image}, this unit is {unit}")
-            }
+            Self::OtherUnit => f.write_str("image made for another unit"),
         }
     }
 }
@@ -321,10 +316,7 @@ impl<'a> Image<'a> {
     /// ([`ImageError::OtherUnit`] otherwise); a version-1 image names none and is accepted.
     pub fn check_unit(&self, unit: u64) -> Result<(), ImageError> {
         match self.header() {
-            Some(h) if h.serial != unit => Err(ImageError::OtherUnit {
-                image: h.serial,
-                unit,
-            }),
+            Some(h) if h.serial != unit => Err(ImageError::OtherUnit),
             _ => Ok(()),
         }
     }

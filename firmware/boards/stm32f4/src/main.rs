@@ -71,8 +71,9 @@ mod app {
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::serial::{TxISR, TxListen};
     use stm32f4xx_hal::timer::Flag;
-    use tcomp_core::frame::MAX_FRAME_LEN;
+    use tcomp_core::frame::{BootReport, MAX_FRAME_LEN};
     use tcomp_firmware::app::{App, IMU6, MAX_CHANNELS, Record, status};
+    use tcomp_firmware::boot::REPORT_PERIODS;
 
     use crate::setup::{
         self, CYCLES_PER_PERIOD, Counters, FrameTx, SampleTimer, Spi1Bus, TICK_HZ, TICKS_PER_PERIOD,
@@ -92,6 +93,8 @@ mod app {
         producer: Producer<'static, u8>,
         consumer: Consumer<'static, u8>,
         tx: FrameTx,
+        /// What this boot loaded: sent first, then every `REPORT_PERIODS` periods.
+        report: BootReport,
     }
 
     #[init(local = [
@@ -123,11 +126,28 @@ mod app {
             );
         }
         let app = cx.local.app_state;
+        let unit = crate::unit_serial();
         let loaded = app.load_for_unit(
             crate::models_image(),
-            crate::unit_serial(),
+            unit,
             tcomp_firmware::app::MAX_COUNTERS,
             crate::setup::THERMOMETERS,
+        );
+        let watchdog = matches!(
+            devices.reset_cause,
+            crate::fault::ResetCause::WindowWatchdog
+                | crate::fault::ResetCause::IndependentWatchdog
+        );
+        let report =
+            tcomp_firmware::boot::report(crate::models_image(), unit, &IMU6, &loaded, watchdog);
+        defmt::info!(
+            "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
+            report.unit_serial,
+            report.image_version,
+            report.image_serial,
+            report.image_state,
+            report.board_hash,
+            report.image_crc
         );
         for (cfg, r) in IMU6.iter().zip(loaded.iter()) {
             match r {
@@ -151,6 +171,7 @@ mod app {
                 producer,
                 consumer,
                 tx: devices.tx,
+                report,
             },
         )
     }
@@ -164,7 +185,7 @@ mod app {
 
     /// One loop period, on TIM2's update.
     #[task(binds = TIM2, priority = 2, local = [
-        app, thermometers, counters, timer, watchdog, producer,
+        app, thermometers, counters, timer, watchdog, producer, report,
         sequence: u32 = 0, periods: u64 = 0, overruns: u32 = 0, dropped: u32 = 0, late: bool = false,
         missed: u32 = 0, last_cycles: Option<u32> = None,
     ])]
@@ -202,6 +223,19 @@ mod app {
             // The previous period overran: this sample was taken late.
             for r in &mut records {
                 r.status |= status::OVERRUN;
+            }
+        }
+        if l.sequence.is_multiple_of(REPORT_PERIODS) {
+            // At boot and every 10 s, before the data frame it announces (never on the loop's
+            // timed path: the sample is done).
+            l.report.sequence = *l.sequence;
+            let mut buf = [0u8; MAX_FRAME_LEN];
+            if let Some(len) = l.report.encode(&mut buf) {
+                if l.producer.capacity() - l.producer.len() >= len {
+                    for &b in buf.get(..len).unwrap_or(&[]) {
+                        let _ = l.producer.enqueue(b);
+                    }
+                }
             }
         }
         let frame = l.app.frame(
