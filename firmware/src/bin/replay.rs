@@ -169,6 +169,45 @@ impl Loop {
     }
 }
 
+/// Loads the models for this unit and returns the boot report, logged. Not inlined: its
+/// temporaries (the image's rows, the load results) live in its own frame, not in `main`'s, which
+/// stays under the sample interrupt for the whole run.
+#[inline(never)]
+fn load_models(
+    app: &mut App<'static>,
+    image: &'static [u8],
+    config: &'static [ChannelConfig],
+    vector: &Vector<'static>,
+    watchdog: bool,
+    next: u32,
+) -> BootReport {
+    let loaded = app.load_for_unit(image, UNIT_SERIAL, vector.counters, vector.thermometers);
+    let mut report = tcomp_firmware::boot::report(image, UNIT_SERIAL, config, &loaded, watchdog);
+    report.sequence = next;
+    defmt::info!(
+        "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
+        report.unit_serial,
+        report.image_version,
+        report.image_serial,
+        report.image_state,
+        report.board_hash,
+        report.image_crc
+    );
+    for (cfg, r) in config.iter().zip(loaded.iter()) {
+        if let Err(e) = r {
+            defmt::warn!(
+                "channel {=str}: no model ({}), raw passed through",
+                cfg.name,
+                e
+            );
+        }
+    }
+    report
+}
+
+/// Encodes and sends a boot report. Not inlined, so its buffer is not part of the sample
+/// interrupt's frame.
+#[inline(never)]
 fn send_report(uart: &Uart, report: &BootReport) {
     let mut bytes = [0u8; MAX_FRAME_LEN];
     if let Some(len) = report.encode(&mut bytes) {
@@ -386,28 +425,7 @@ fn main() -> ! {
         vector.counters
     );
     app.reset(config);
-    let loaded = app.load_for_unit(image, UNIT_SERIAL, vector.counters, vector.thermometers);
-    let mut report =
-        tcomp_firmware::boot::report(image, UNIT_SERIAL, config, &loaded, boot_flags != 0);
-    report.sequence = run.next;
-    defmt::info!(
-        "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
-        report.unit_serial,
-        report.image_version,
-        report.image_serial,
-        report.image_state,
-        report.board_hash,
-        report.image_crc
-    );
-    for (cfg, r) in config.iter().zip(loaded.iter()) {
-        if let Err(e) = r {
-            defmt::warn!(
-                "channel {=str}: no model ({}), raw passed through",
-                cfg.name,
-                e
-            );
-        }
-    }
+    let report = load_models(app, image, config, &vector, boot_flags != 0, run.next);
 
     let timer = Timer::timer0();
     let time = TimeBase::start();
