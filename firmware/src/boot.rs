@@ -13,7 +13,9 @@ use tcomp_core::frame::{BOOT_REPORT_PERIOD_S, BootReport, ChannelState, image_st
 pub const REPORT_PERIODS: u32 = (BOOT_REPORT_PERIOD_S as f32 / PERIOD_S) as u32;
 
 /// The report of a boot that read `image` on the unit `unit_serial`, with each channel of `config`
-/// loaded as `loaded` says; `watchdog` when the boot followed a watchdog reset.
+/// loaded as `loaded` says; `watchdog` when the boot followed a watchdog reset. Not inlined: a
+/// boot path keeps its frame off the model decoder's stack.
+#[inline(never)]
 pub fn report(
     image: &[u8],
     unit_serial: u64,

@@ -48,6 +48,8 @@ pub enum TableError {
 /// hardware (`counters` counter or sample channels, `thermometers` converters) and the board's
 /// channel configuration `config` (each row's source and each input's thermometer must be the
 /// configuration's: the image was made for this wiring). A version-1 image has no table: `Ok`.
+/// Not inlined: its rows stay off the model decoder's stack.
+#[inline(never)]
 pub fn check_table(
     image: &Image<'_>,
     config: &[ChannelConfig],

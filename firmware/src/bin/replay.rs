@@ -427,6 +427,29 @@ fn main() -> ! {
     app.reset(config);
     let report = load_models(app, image, config, &vector, boot_flags != 0, run.next);
 
+    start_loop(app, run, vector, config, cp.SYST, boot_flags, report);
+    // A board would sleep here (WFI). Under `-icount …,sleep=off` QEMU 7.2 delivers only every
+    // second CMSDK timer interrupt across a WFI (measured: two timer periods between interrupts
+    // with WFI, one when the CPU does not sleep; the timer's own INTSTATUS, polled, sets every
+    // period), so `main` spins; the run is made short by a coarser `-icount` shift instead.
+    while !DONE.load(Ordering::Acquire) {
+        cortex_m::asm::nop();
+    }
+    finish(paint_bottom, paint_top)
+}
+
+/// Starts the sample timer and hands the loop's state to the interrupt. Not inlined: the `Loop`
+/// is built in this frame, which is gone before the interrupt runs on top of `main`'s.
+#[inline(never)]
+fn start_loop(
+    app: &'static mut App<'static>,
+    run: &'static mut Run,
+    vector: Vector<'static>,
+    config: &'static [ChannelConfig],
+    syst: cortex_m::peripheral::SYST,
+    boot_flags: u16,
+    report: BootReport,
+) {
     let timer = Timer::timer0();
     let time = TimeBase::start();
     let board = vector.board_at(run.next as usize);
@@ -443,7 +466,7 @@ fn main() -> ! {
         timer,
         time,
         watchdog,
-        counter: InstructionCounter::new(cp.SYST),
+        counter: InstructionCounter::new(syst),
         check: TimeCheck::new(TICKS_PER_PERIOD),
         next_edge: t_start.wrapping_add(PERIOD),
         edges: 0,
@@ -455,18 +478,17 @@ fn main() -> ! {
     cortex_m::interrupt::free(|cs| *LOOP.borrow(cs).borrow_mut() = Some(state));
     // SAFETY: the handler (DefaultHandler, IRQ 8) only takes LOOP inside a critical section.
     unsafe { NVIC::unmask(Irq(TIMER0_IRQ as u16)) };
-    // A board would sleep here (WFI). Under `-icount …,sleep=off` QEMU 7.2 delivers only every
-    // second CMSDK timer interrupt across a WFI (measured: two timer periods between interrupts
-    // with WFI, one when the CPU does not sleep; the timer's own INTSTATUS, polled, sets every
-    // period), so `main` spins; the run is made short by a coarser `-icount` shift instead.
-    while !DONE.load(Ordering::Acquire) {
-        cortex_m::asm::nop();
-    }
+}
+
+/// Stops the loop, measures the stack and prints the summary. Not inlined, like `start_loop`.
+#[inline(never)]
+fn finish(paint_bottom: usize, paint_top: usize) -> ! {
     NVIC::mask(Irq(TIMER0_IRQ as u16));
     let Some(state) = cortex_m::interrupt::free(|cs| LOOP.borrow(cs).borrow_mut().take()) else {
         exit(false)
     };
     state.watchdog.stop();
+    let config = state.vector.config;
     let r = state.run;
     let peak = stack_peak(paint_bottom, paint_top);
     let stack_top = (&raw const _stack_start) as usize;
@@ -474,7 +496,7 @@ fn main() -> ! {
     let timed = r.samples.max(1);
     defmt::println!(
         "REPLAY-SUMMARY config={=u16} samples={=u32} mismatches={=u32} flagged={=u32} hash={=u32} instructions_mean={=u32} instructions_max={=u32} instructions_max_at={=u32} period_ticks={=u32} late={=u32} missed={=u32} watchdog_resets={=u32} stack_bytes={=u32}",
-        vector.config,
+        config,
         r.samples,
         r.mismatches,
         r.flagged,
