@@ -230,11 +230,11 @@ mod app {
             // timed path: the sample is done).
             l.report.sequence = *l.sequence;
             let mut buf = [0u8; MAX_FRAME_LEN];
-            if let Some(len) = l.report.encode(&mut buf) {
-                if l.producer.capacity() - l.producer.len() >= len {
-                    for &b in buf.get(..len).unwrap_or(&[]) {
-                        let _ = l.producer.enqueue(b);
-                    }
+            if let Some(len) = l.report.encode(&mut buf)
+                && l.producer.capacity() - l.producer.len() >= len
+            {
+                for &b in buf.get(..len).unwrap_or(&[]) {
+                    let _ = l.producer.enqueue(b);
                 }
             }
         }
