@@ -109,7 +109,7 @@ pub enum ImageError {
     UnsupportedVersion(u16),
     /// More entries than [`MAX_ENTRIES`], or a table past the end of the region.
     BadTable,
-    /// The table's CRC does not match.
+    /// The CRC does not match: the table's (version 1) or the whole image's (version 2).
     Checksum,
     /// The image has no entry for the channel.
     Missing,
@@ -146,7 +146,9 @@ impl core::fmt::Display for ImageError {
             Self::NoImage => f.write_str("no model image (erased or empty region)"),
             Self::UnsupportedVersion(v) => write!(f, "unsupported image version {v}"),
             Self::BadTable => f.write_str("image table too long"),
-            Self::Checksum => f.write_str("image table checksum mismatch"),
+            Self::Checksum => {
+                f.write_str("image checksum mismatch (the table; in version 2 the whole image)")
+            }
             Self::Missing => f.write_str("no blob for this channel in the image"),
             Self::OutOfBounds => f.write_str("blob outside the image region"),
             Self::TooManyEntries => write!(f, "at most {MAX_ENTRIES} blobs fit the image table"),
