@@ -317,3 +317,94 @@ impl PulseCounter for Steady {
         Ok(1000)
     }
 }
+
+/// The MEMS IMU of `firmware/descriptions/mems6.toml`: one die thermometer, six sample sources.
+static MEMS6: [ChannelConfig; 6] = {
+    const fn ch(id: u16, name: &'static str, per_lsb: f32) -> ChannelConfig {
+        ChannelConfig {
+            id,
+            name,
+            thermometers: &[("temp_imu_C", 0)],
+            counter: id as u8,
+            // `per_pulse` is the sample source's unit per LSB.
+            scale: ChannelScale::rlg_arcsec_per_pulse(per_lsb),
+        }
+    }
+    [
+        ch(0, "gyro-x", 1.527_163_1e-4),
+        ch(1, "gyro-y", 1.527_163_1e-4),
+        ch(2, "gyro-z", 1.527_163_1e-4),
+        ch(3, "acc-x", 5.9855e-4),
+        ch(4, "acc-y", 5.9855e-4),
+        ch(5, "acc-z", 5.9855e-4),
+    ]
+};
+
+/// `tcomp image --board firmware/descriptions/mems6.toml --serial 0x5EED --created 1763900000`
+/// of six models `tcomp fit` made from `data/realdata/mems_thermal_cycle.csv` (train before
+/// 3130 s; `--feature temp_imu_C --reference-value 0 --sensor mems-gyro|mems-accel --axis A
+/// --unit rad/s|m/s^2`): the real tool's image of the real description and data.
+static MEMS6_IMAGE: &[u8] = include_bytes!("testdata/mems6.bin");
+
+/// A die at a fixed temperature.
+struct Die(f32);
+
+impl tcomp_hal::ErrorType for Die {
+    type Error = ErrorKind;
+}
+
+impl Thermometer for Die {
+    fn read_celsius(&mut self) -> Result<f32, ErrorKind> {
+        Ok(self.0)
+    }
+}
+
+#[test]
+fn a_mems_imu_runs_its_real_models_from_the_tools_image_on_sample_sources() {
+    let mut app = App::new(&MEMS6);
+    let r = app.load_for_unit(MEMS6_IMAGE, 0x5EED, 6, 1);
+    assert_eq!(&r[..6], &[Ok(()); 6], "{r:?}");
+    // The same image on the RLG/QMA wiring: its table is refused, nothing loads.
+    let mut rlg = App::new(&IMU6);
+    let r = rlg.load_for_unit(MEMS6_IMAGE, 0x5EED, MAX_COUNTERS, MAX_THERMOMETERS);
+    assert!(
+        r.iter().all(|x| matches!(x, Err(LoadError::Table(_)))),
+        "{r:?}"
+    );
+
+    let registers = [
+        Ok(100),
+        Ok(-200),
+        Ok(0),
+        Ok(1000),
+        Ok(-1000),
+        Err(ErrorKind::Other),
+    ];
+    let mut out = [Record::default(); 6];
+    for _ in 0..5 {
+        app.sample_sources(&mut [Die(30.0)], &registers, &mut out);
+    }
+    for (k, o) in out.iter().enumerate().take(5) {
+        let raw = match registers[k] {
+            Ok(v) => v as f32 * MEMS6[k].scale.per_pulse(),
+            Err(_) => unreachable!(),
+        };
+        assert_eq!(o.status, status::OK, "channel {k}: {o:?}");
+        assert!(o.correction.is_finite() && o.correction != 0.0, "{o:?}");
+        assert_eq!(o.compensated, raw - o.correction, "channel {k}");
+    }
+    // The failed register read: NaN, flagged.
+    assert!(out[5].compensated.is_nan());
+    assert_ne!(out[5].status & status::SENSOR_ERROR, 0);
+    // The correction follows the die temperature, as the fitted cubic does (a 30 °C step is
+    // refused as a jump until the physics could have got there: 6 s).
+    let before = out[3].correction;
+    for _ in 0..2000 {
+        app.sample_sources(&mut [Die(60.0)], &registers, &mut out);
+    }
+    assert!(
+        (out[3].correction - before).abs() > 1e-4,
+        "{before} {:?}",
+        out[3]
+    );
+}
