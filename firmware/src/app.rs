@@ -25,7 +25,7 @@
 //! * a channel whose blob is missing, corrupt or reads inputs it is not wired to runs with
 //!   `NO_MODEL`: raw value passed through, flagged.
 
-use crate::image::{Image, ImageError};
+use crate::image::{Image, ImageError, TableError, check_table};
 use tcomp_core::frame::{ChannelOutput, Frame, MAX_CHANNELS as FRAME_CHANNELS};
 use tcomp_core::{BlobError, Channel, MAX_INPUTS, Model};
 use tcomp_hal::scale::ChannelScale;
@@ -159,10 +159,12 @@ pub const IMU6: [ChannelConfig; 6] = [
     qma(5, "qma-z", &[("t_qma_c", 11)], 5),
 ];
 
-/// A single fiber-optic gyro with its coil thermometer (channel id 6).
+/// A single fiber-optic gyro with its coil thermometer: the board description
+/// `firmware/descriptions/ifog1.toml` (channel 0, `ifog-x`, as the triad's first channel), whose
+/// image the QEMU run loads.
 pub const IFOG1: [ChannelConfig; 1] = [ChannelConfig {
-    id: 6,
-    name: "ifog",
+    id: 0,
+    name: "ifog-x",
     thermometers: &[("t_coil_c", 0)],
     counter: 0,
     scale: ChannelScale::rlg_arcsec_per_pulse(RLG_ARCSEC_PER_PULSE),
@@ -172,12 +174,36 @@ pub const IFOG1: [ChannelConfig; 1] = [ChannelConfig {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(target_os = "none", derive(defmt::Format))]
 pub enum LoadError {
-    /// The image, or this channel's entry in it.
+    /// The image, or this channel's entry in it (an image made for another unit included).
     Image(ImageError),
     /// The blob was rejected by `Model::decode`.
     Blob(BlobError),
     /// The model reads an input column this channel has no thermometer for.
     Unwired,
+    /// The image's channel table cannot run on this board (see [`crate::image::check_table`]).
+    Table(TableError),
+    /// The image's table has no row for this channel.
+    NotInTable,
+    /// The blob's sensor kind, axis, unit or inputs are not its row's: an entry that points at
+    /// another channel's (valid) blob.
+    WrongChannel,
+}
+
+impl LoadError {
+    /// A one-byte code for the boot report: 0 loaded, then one per reason.
+    pub fn code(r: &Result<(), LoadError>) -> u8 {
+        match r {
+            Ok(()) => 0,
+            Err(Self::Image(ImageError::Missing)) => 1,
+            Err(Self::Image(ImageError::OtherUnit)) => 2,
+            Err(Self::Image(_)) => 3,
+            Err(Self::Blob(_)) => 4,
+            Err(Self::Unwired) => 5,
+            Err(Self::Table(_)) => 6,
+            Err(Self::NotInTable) => 7,
+            Err(Self::WrongChannel) => 8,
+        }
+    }
 }
 
 /// One output of one channel.
@@ -290,11 +316,40 @@ impl<'a> App<'a> {
     }
 
     /// Loads every channel's model from the image bytes; returns each channel's outcome. A channel
-    /// that fails keeps running without a model.
+    /// that fails keeps running without a model. No unit check: see [`App::load_for_unit`].
     pub fn load(&mut self, image: &'a [u8]) -> [Result<(), LoadError>; MAX_CHANNELS] {
-        let image = Image::parse(image);
+        self.load_checked(Image::parse(image), MAX_COUNTERS, MAX_THERMOMETERS)
+    }
+
+    /// [`App::load`] for the unit with serial `unit_serial` on a board with `counters` counter (or
+    /// sample) channels and `thermometers` converters: an image made for another unit, or whose
+    /// channel table the board cannot run, loads no model at all (every channel says why).
+    pub fn load_for_unit(
+        &mut self,
+        image: &'a [u8],
+        unit_serial: u64,
+        counters: usize,
+        thermometers: usize,
+    ) -> [Result<(), LoadError>; MAX_CHANNELS] {
+        let image = Image::parse(image).and_then(|i| i.check_unit(unit_serial).map(|()| i));
+        self.load_checked(image, counters, thermometers)
+    }
+
+    fn load_checked(
+        &mut self,
+        image: Result<Image<'a>, ImageError>,
+        counters: usize,
+        thermometers: usize,
+    ) -> [Result<(), LoadError>; MAX_CHANNELS] {
+        let table = match &image {
+            Ok(i) => check_table(i, self.config, counters, thermometers),
+            Err(_) => Ok(()),
+        };
         core::array::from_fn(|k| {
-            let loaded = self.load_channel(k, image);
+            let loaded = match table {
+                Err(e) if k < self.config.len() => Err(LoadError::Table(e)),
+                _ => self.load_channel(k, image),
+            };
             if let (Err(_), Some(m)) = (&loaded, self.models.get_mut(k)) {
                 *m = None;
             }
@@ -316,6 +371,10 @@ impl<'a> App<'a> {
         let slot = self.models.get_mut(k).ok_or(LoadError::Unwired)?;
         decode_into(slot, blob).map_err(LoadError::Blob)?;
         let model = slot.as_ref().ok_or(LoadError::Unwired)?;
+        // After the decode, so the row is not on the stack under the decoder's frame.
+        if let Ok(i) = image {
+            bound_to_row(&i, cfg.id, model)?;
+        }
         let map = self.input_map.get_mut(k).ok_or(LoadError::Unwired)?;
         for (slot, name) in map.iter_mut().zip(model.program.inputs.iter()) {
             let (_, t) = cfg
@@ -517,6 +576,86 @@ impl<'a> App<'a> {
         }
     }
 
+    /// One period of a configuration whose channels read sample sources (a digital IMU's
+    /// registers, `registers[cfg.counter]`) instead of pulse counters: the raw value is the
+    /// register times the channel's scale, a failed read NaN with [`status::SENSOR_ERROR`]; the
+    /// thermometers, flags and model step do what the counter path's do (a second copy, see
+    /// `sampled_step`). `precise_value` does not apply
+    /// (no pulse count): the frame's value is the f32 `compensated`.
+    pub fn sample_sources<T: Thermometer>(
+        &mut self,
+        thermometers: &mut [T],
+        registers: &[Result<i32, ErrorKind>],
+        out: &mut [Record],
+    ) {
+        self.read_thermometers(thermometers);
+        for (k, rec) in out.iter_mut().take(self.config.len()).enumerate() {
+            let Some(cfg) = self.config.get(k) else {
+                continue;
+            };
+            let mut flags = 0u16;
+            let raw = match registers.get(usize::from(cfg.counter)) {
+                Some(Ok(v)) => *v as f32 * cfg.scale.per_pulse(),
+                _ => {
+                    flags |= status::SENSOR_ERROR;
+                    f32::NAN
+                }
+            };
+            let o = self.sampled_step::<T>(k, raw, &mut flags);
+            *rec = Record {
+                compensated: o.compensated,
+                status: u16::from(o.status.0) | flags,
+                correction: o.correction,
+                ..Record::default()
+            };
+        }
+    }
+
+    /// Channel `k`'s thermometer flags and model step for the sample-source path. The counter
+    /// path (`step_channel`) does the same inline. Kept apart, and generic (over the caller's
+    /// thermometer type, unused) so that it is compiled only where a board instantiates
+    /// `sample_sources`: a second call site of `Channel::step` compiled into this crate changes
+    /// how the counter path is inlined, which cost it 50 to 350 instructions per sample under
+    /// QEMU, past the 12,000 budget.
+    #[allow(clippy::extra_unused_type_parameters)] // on purpose: see above
+    fn sampled_step<T>(&mut self, k: usize, raw: f32, flags: &mut u16) -> tcomp_core::Output {
+        let (Some(cfg), Some(channel), Some(map), Some(n)) = (
+            self.config.get(k),
+            self.channels.get_mut(k),
+            self.input_map.get(k),
+            self.n_inputs.get(k),
+        ) else {
+            return tcomp_core::Output {
+                compensated: raw,
+                correction: 0.0,
+                status: tcomp_core::Status::NO_MODEL,
+            };
+        };
+        for &(_, t) in cfg.thermometers {
+            if let Some(s) = self.therms.get(usize::from(t)) {
+                if s.error {
+                    *flags |= status::SENSOR_ERROR;
+                }
+                if s.repeats >= STUCK_SAMPLES {
+                    *flags |= status::STUCK;
+                }
+                if s.jump {
+                    *flags |= status::TEMP_JUMP;
+                }
+            }
+        }
+        let mut inputs = [0.0f32; MAX_INPUTS];
+        for (x, &t) in inputs.iter_mut().zip(map.iter()).take(usize::from(*n)) {
+            *x = self
+                .therms
+                .get(usize::from(t))
+                .map_or(f32::NAN, |s| s.value);
+        }
+        let model = self.models.get(k).and_then(Option::as_ref);
+        let inputs = inputs.get(..usize::from(*n)).unwrap_or(&[]);
+        channel.step(model, inputs, raw)
+    }
+
     /// The output frame of one sample: `records` (as [`sample`](Self::sample) wrote them, one per
     /// channel of the configuration) as [`precise_value`](Self::precise_value)s with their status
     /// words, stamped with `sequence` and `timestamp` ticks of `tick_hz`. Encode it with
@@ -556,6 +695,18 @@ impl<'a> App<'a> {
     }
 }
 
+/// Whether `model` belongs on channel `id`'s row of a version-2 `image` (a version-1 image has
+/// no rows: yes). Not inlined: the row is on the stack only for this check.
+#[inline(never)]
+fn bound_to_row(image: &Image<'_>, id: u16, model: &FwModel<'_>) -> Result<(), LoadError> {
+    if image.version() < crate::image::VERSION_2 {
+        return Ok(());
+    }
+    let row = image.channel_by_id(id).ok_or(LoadError::NotInTable)?;
+    row.accepts(&model.meta, model.program.inputs.iter().map(|s| &**s))
+        .map_err(|_| LoadError::WrongChannel)
+}
+
 /// Decodes `blob` into `slot` in place ([`Model::decode_into`]). Not inlined, so the decoder's
 /// frame is on the stack once, while the caller's stays small.
 #[inline(never)]
@@ -583,3 +734,7 @@ pub fn plausible_interval(latched: f32, periods: u16) -> bool {
 #[cfg(test)]
 #[path = "app_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "load_tests.rs"]
+mod load_tests;

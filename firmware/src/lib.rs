@@ -1,5 +1,5 @@
 //! The firmware: the compensation loop ([`app`]), the fault record kept across resets ([`fault`]),
-//! the time-base check ([`timing`]),
+//! the time-base check ([`timing`]), the boot report ([`boot`]),
 //! the model-blob image in flash ([`image`]) and its two slots ([`slots`]), the update task that
 //! rewrites them over the serial link ([`update`]), the replay board of the QEMU run ([`replay`]), and
 //! board support for the binaries (semihosting exit codes, the SysTick instruction counter).
@@ -15,6 +15,7 @@
 #![no_std]
 
 pub mod app;
+pub mod boot;
 pub mod fault;
 pub mod image;
 pub mod replay;

@@ -72,6 +72,10 @@ pub const TICKS_PER_PERIOD: u64 = 125_000;
 /// Tick rate of the replayed time base.
 pub const TICK_HZ: u32 = 25_000_000;
 
+/// The replay board's unit serial: a fixed test identity (QEMU has no OTP area), which the QEMU
+/// run's images are made for (`tcomp image --serial`).
+pub const UNIT_SERIAL: u64 = 0x7C0_0001;
+
 /// Configuration code of [`crate::app::IMU6`].
 pub const CONFIG_IMU6: u16 = 0;
 /// Configuration code of [`crate::app::IFOG1`].

@@ -56,3 +56,21 @@ impl UpdateTask {
         self.receiver.is_receiving()
     }
 }
+
+/// The unit's serial number as the text the update protocol's HELLO answer carries: `0x` and 16
+/// lower-case hex digits, the form `tcomp image --serial` accepts and `tcomp inspect` prints.
+pub const fn serial_text(serial: u64) -> [u8; 18] {
+    let mut out = [b'0'; 18];
+    out[1] = b'x';
+    let mut i = 0;
+    while i < 16 {
+        let nibble = ((serial >> (60 - 4 * i)) & 0xF) as u8;
+        out[2 + i] = if nibble < 10 {
+            b'0' + nibble
+        } else {
+            b'a' + nibble - 10
+        };
+        i += 1;
+    }
+    out
+}

@@ -10,6 +10,7 @@
 //! by its reader (`tcomp … | head`) ends the run quietly with 0; any other failure to write it is an
 //! error.
 
+mod board;
 mod cmd;
 mod demo;
 mod render;
@@ -27,7 +28,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Print the contents of a model blob; a corrupt blob is named as such, with the reason.
+    /// Print the contents of a model blob or a calibration image; a corrupt one is named as such,
+    /// with the reason.
     Inspect(cmd::inspect::Args),
     /// Train a compensation model from a chamber run and write its blob.
     Fit(Box<cmd::fit::Args>),
@@ -35,7 +37,8 @@ enum Command {
     Eval(cmd::eval::Args),
     /// Simulate temperature-chamber runs with known physics: train.csv, verify.csv and truth.json.
     Simulate(cmd::simulate::Args),
-    /// Pack one model blob per firmware channel into the image flashed at 0x003F0000.
+    /// Pack model blobs, checked against a board description, into the calibration image flashed
+    /// at 0x003F0000.
     Image(cmd::image::Args),
     /// Where a model fails and which physical effect is most likely missing (with the evidence).
     Diagnose(cmd::diagnose::Args),

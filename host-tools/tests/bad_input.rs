@@ -147,6 +147,12 @@ fn fit_args<'a>(data: &'a str, out: &'a str) -> Vec<&'a str> {
         "ref_dph",
         "--feature",
         "t_coil_c",
+        "--sensor",
+        "ifog",
+        "--axis",
+        "x",
+        "--unit",
+        "deg/h",
         "--out",
         out,
         "--quiet",
@@ -172,12 +178,41 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Option<Vec<u8>>> {
     m
 }
 
+/// A board description with two IFOG channels on one coil thermometer, for `tcomp image`.
+const BOARD: &str = r#"
+name = "two-ifogs"
+[[thermometer]]
+name = "coil"
+adc = 0
+input = 0
+type = "pt100"
+[[channel]]
+id = 0
+name = "ifog-a"
+sensor = "ifog"
+axis = "x"
+unit = "deg/h"
+counter = 0
+scale = 1e-5
+inputs = { t_coil_c = "coil" }
+[[channel]]
+id = 1
+name = "ifog-b"
+sensor = "ifog"
+axis = "x"
+unit = "deg/h"
+counter = 1
+scale = 1e-5
+inputs = { t_coil_c = "coil" }
+"#;
+
 /// A directory with the standard files: a good run and blob, and earlier outputs of every command.
 fn standard_dir() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     let p = dir.path();
     std::fs::write(p.join("run.csv"), run_csv()).unwrap();
     std::fs::write(p.join("m.tcm"), model_blob()).unwrap();
+    std::fs::write(p.join("b.toml"), BOARD).unwrap();
     std::fs::write(p.join("out.tcm"), b"an earlier blob").unwrap();
     std::fs::write(p.join("out.bin"), b"an earlier image").unwrap();
     std::fs::write(p.join("out.html"), b"<p>an earlier report</p>").unwrap();
@@ -323,7 +358,7 @@ fn catalogue() -> Vec<Case> {
         case("fit --out is --data", "FIT --data run.csv --out run.csv").says(&["--out run.csv", "--data run.csv", "destroy"]),
         case("fit --out is --data by another name", "FIT --data run.csv --out sub/../run.csv").file("sub/keep", "").says(&["--data run.csv"]),
         case("fit --out is --spec", "FIT --data run.csv --spec s.toml --out s.toml").file("s.toml", "average = 10\n").says(&["--spec s.toml"]),
-        case("image --out is a --model", "image --model 0=m.tcm --out m.tcm").says(&["--out m.tcm", "--model m.tcm"]),
+        case("image --out is a --model", "image --board b.toml --serial 1 --model 0=m.tcm --out m.tcm").says(&["--out m.tcm", "--model m.tcm"]),
         case("report --out is a --model", "report --model m.tcm --data run.csv --out m.tcm").says(&["--model m.tcm"]),
         case("report --out is --data", "report --model m.tcm --data run.csv --out run.csv").says(&["--data run.csv"]),
         case("report --out is --verify", "report --model m.tcm --data run.csv --verify v.csv --out v.csv").file("v.csv", run_csv()).says(&["--verify v.csv"]),
@@ -400,16 +435,21 @@ fn catalogue() -> Vec<Case> {
         // blobs
         case("blob with a bad magic", "eval --model junk.tcm --data run.csv").file("junk.tcm", "not a blob at all").says(&["junk.tcm: corrupt model blob", "bad magic"]),
         case("truncated blob", "inspect cut.tcm").file("cut.tcm", half_blob()).says(&["cut.tcm: corrupt model blob"]),
-        case("blob with a flipped bit", "image --model 0=bad.tcm --out out.bin").file("bad.tcm", flipped_blob()).says(&["bad.tcm: corrupt model blob", "checksum"]),
+        case("blob with a flipped bit", "image --board b.toml --serial 1 --model 0=bad.tcm --out out.bin").file("bad.tcm", flipped_blob()).says(&["bad.tcm: corrupt model blob", "checksum"]),
         case("a CSV given as a blob", "inspect run.csv").says(&["run.csv: corrupt model blob"]),
         case("missing blob", "inspect missing.tcm").says(&["missing.tcm", "No such file"]),
         case("compare with a bad second blob", "compare m.tcm junk.tcm --data run.csv").file("junk.tcm", "junk").says(&["junk.tcm"]),
         case("report with a bad blob", "report --model junk.tcm --data run.csv --out out.html").file("junk.tcm", "junk").says(&["junk.tcm"]),
         case("diagnose --verify missing", "DIAG --verify nope.csv").says(&["nope.csv"]),
         // image arguments
-        case("image channel id not a number", "image --model x=m.tcm --out out.bin").says(&["--model x=m.tcm", "channel id"]),
-        case("image --model without ID=", "image --model m.tcm --out out.bin").says(&["expected ID=FILE"]),
-        case("image channel twice", "image --model 0=m.tcm --model 0=m.tcm --out out.bin").says(&["channel 0 is given twice"]),
+        case("image channel id not a number", "image --board b.toml --serial 1 --model x=m.tcm --out out.bin").says(&["--model x=m.tcm", "channel id"]),
+        case("image --model without ID=", "image --board b.toml --serial 1 --model m.tcm --out out.bin").says(&["expected ID=FILE"]),
+        case("image channel not in the board", "image --board b.toml --serial 1 --model 99=m.tcm --out out.bin").says(&["--model 99=m.tcm", "channel 99", "b.toml"]),
+        case("image board missing", "image --board nope.toml --serial 1 --model 0=m.tcm --out out.bin").says(&["nope.toml"]),
+        case("image board not TOML", "image --board run.csv --serial 1 --model 0=m.tcm --out out.bin").says(&["run.csv", "line"]),
+        case("image board input on no thermometer", "image --board bad.toml --serial 1 --model 0=m.tcm --out out.bin").file("bad.toml", BOARD.replace("t_coil_c = \"coil\" }\n[[channel]]", "t_coil_c = \"cool\" }\n[[channel]]")).says(&["bad.toml", "channel 0 (ifog-a)", "t_coil_c", "cool"]),
+        case("image serial not a number", "image --board b.toml --serial x1 --model 0=m.tcm --out out.bin").usage().says(&["--serial", "x1"]),
+        case("image channel twice", "image --board b.toml --serial 1 --model 0=m.tcm --model 0=m.tcm --out out.bin").says(&["channel 0 is given twice"]),
         // usage
         case("unknown flag", "FIT --data run.csv --out out.tcm --bogus").usage().says(&["--bogus"]),
         case("missing required --out", "fit --data run.csv --target gyro_dph").usage().says(&["--out"]),
@@ -440,10 +480,10 @@ fn hardened() -> Vec<Case> {
         case("--centers 0 --method mse", "FIT --data run.csv --out out.tcm --method mse --centers 0").usage_or_failure().says(&["--centers"]),
         case("simulate --rate-hz 0", "simulate --preset ifog-shupe --rate-hz 0 --out sim").usage_or_failure().says(&["--rate-hz"]),
         case("blob with q = 3.2e38, g = 1e-7: eval", "eval --model huge.tcm --data run.csv").file("huge.tcm", huge.clone()).says(&["huge.tcm"]),
-        case("blob with q = 3.2e38, g = 1e-7: image", "image --model 0=huge.tcm --out out.bin").file("huge.tcm", huge.clone()).says(&["huge.tcm"]),
+        case("blob with q = 3.2e38, g = 1e-7: image", "image --board b.toml --serial 1 --model 0=huge.tcm --out out.bin").file("huge.tcm", huge.clone()).says(&["huge.tcm"]),
         case("blob with q = 3.2e38, g = 1e-7: inspect", "inspect huge.tcm").file("huge.tcm", huge).says(&["huge.tcm"]),
         case("blob with every weight 3e38: eval", "eval --model heavy.tcm --data run.csv").file("heavy.tcm", heavy.clone()).says(&["heavy.tcm"]),
-        case("blob with every weight 3e38: image", "image --model 0=heavy.tcm --out out.bin").file("heavy.tcm", heavy.clone()).says(&["heavy.tcm"]),
+        case("blob with every weight 3e38: image", "image --board b.toml --serial 1 --model 0=heavy.tcm --out out.bin").file("heavy.tcm", heavy.clone()).says(&["heavy.tcm"]),
         case("blob with every weight 3e38: inspect", "inspect heavy.tcm").file("heavy.tcm", heavy).says(&["heavy.tcm"]),
     ]
 }
@@ -616,6 +656,10 @@ fn image_output_survives_every_failing_run() {
                 "corrupt blob",
                 &[
                     "image",
+                    "--board",
+                    "b.toml",
+                    "--serial",
+                    "1",
                     "--model",
                     "0=m.tcm",
                     "--model",
@@ -626,27 +670,46 @@ fn image_output_survives_every_failing_run() {
             ),
             (
                 "missing blob",
-                &["image", "--model", "0=nope.tcm", "--out", "out.bin"],
+                &[
+                    "image",
+                    "--board",
+                    "b.toml",
+                    "--serial",
+                    "1",
+                    "--model",
+                    "0=nope.tcm",
+                    "--out",
+                    "out.bin",
+                ],
             ),
             (
                 "channel twice",
                 &[
-                    "image", "--model", "0=m.tcm", "--model", "0=m.tcm", "--out", "out.bin",
+                    "image", "--board", "b.toml", "--serial", "1", "--model", "0=m.tcm", "--model",
+                    "0=m.tcm", "--out", "out.bin",
                 ],
             ),
             (
                 "bad channel id",
-                &["image", "--model", "-1=m.tcm", "--out", "out.bin"],
+                &[
+                    "image", "--board", "b.toml", "--serial", "1", "--model", "-1=m.tcm", "--out",
+                    "out.bin",
+                ],
             ),
             (
                 "--out is a --model",
-                &["image", "--model", "0=m.tcm", "--out", "m.tcm"],
+                &[
+                    "image", "--board", "b.toml", "--serial", "1", "--model", "0=m.tcm", "--out",
+                    "m.tcm",
+                ],
             ),
         ],
     );
     succeeds_replacing_only(
         dir.path(),
-        &["image", "--model", "0=m.tcm", "--out", "out.bin"],
+        &[
+            "image", "--board", "b.toml", "--serial", "1", "--model", "0=m.tcm", "--out", "out.bin",
+        ],
         &["out.bin"],
     );
 }

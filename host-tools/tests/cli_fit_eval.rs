@@ -178,6 +178,49 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
         "--feature",
         "e",
     ];
+    // A description whose channel 3 takes the small model (inputs a, b, c); the flight check
+    // refuses the big one before the channel's own checks.
+    let board = image.with_file_name("board.toml");
+    std::fs::write(
+        &board,
+        r#"name = "test"
+[[thermometer]]
+name = "ta"
+adc = 0
+input = 0
+type = "pt100"
+[[thermometer]]
+name = "tb"
+adc = 0
+input = 1
+type = "pt100"
+[[thermometer]]
+name = "tc"
+adc = 0
+input = 2
+type = "pt100"
+[[channel]]
+id = 0
+name = "zero"
+sensor = "other"
+axis = "x"
+unit = "u"
+counter = 0
+scale = 1.0
+inputs = { a = "ta" }
+[[channel]]
+id = 3
+name = "three"
+sensor = "other"
+axis = "x"
+unit = "u"
+counter = 3
+scale = 1.0
+inputs = { a = "ta", b = "tb", c = "tc" }
+"#,
+    )
+    .unwrap();
+    let board = board.display().to_string();
     let out = fit(&big, &five);
     succeeded(&out);
     let err = String::from_utf8_lossy(&out.stderr);
@@ -187,6 +230,10 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
     );
     let out = tcomp(&[
         "image",
+        "--board",
+        &board,
+        "--serial",
+        "1",
         "--model",
         &format!("0={}", big.display()),
         "--out",
@@ -210,6 +257,10 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
             "ols",
             "--centers",
             "12",
+            "--axis",
+            "x",
+            "--unit",
+            "u",
         ],
     );
     succeeded(&out);
@@ -220,6 +271,10 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
     );
     let out = tcomp(&[
         "image",
+        "--board",
+        &board,
+        "--serial",
+        "1",
         "--model",
         &format!("3={}", small.display()),
         "--out",

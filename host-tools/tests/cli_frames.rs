@@ -98,3 +98,38 @@ fn missing_file_is_an_error() {
     let out = tcomp(&["frames", "/nonexistent/capture.bin"]);
     assert!(!out.status.success());
 }
+
+#[test]
+fn a_boot_report_between_frames_is_printed_and_the_frames_kept() {
+    use tcomp_core::frame::{BootReport, ChannelState, image_state};
+    let mut r = BootReport::default();
+    r.sequence = 3;
+    r.unit_serial = 0x5EED;
+    r.image_serial = 0x5EED;
+    r.image_version = 2;
+    r.image_state = image_state::OK;
+    r.set_channels(&[
+        ChannelState { id: 0, state: 0 },
+        ChannelState { id: 1, state: 8 },
+    ]);
+    let mut buf = [0u8; 128];
+    let n = r.encode(&mut buf).unwrap();
+    let mut bytes = encode(&frame(2));
+    bytes.extend_from_slice(&buf[..n]);
+    bytes.extend(encode(&frame(3)));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("boot.bin");
+    std::fs::write(&path, &bytes).unwrap();
+    let out = tcomp(&["frames", path.to_str().unwrap(), "--json"]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["frames"].as_array().unwrap().len(), 2);
+    assert_eq!(v["stats"]["skipped_bytes"], 0);
+    let b = &v["boot_reports"][0];
+    assert_eq!(b["unit_serial"], 0x5EED);
+    assert_eq!(b["image_state"], "ok");
+    assert_eq!(b["channels"][1]["model"], "blob made for another channel");
+    let out = tcomp(&["frames", path.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("boot report"), "{err}");
+}

@@ -50,6 +50,12 @@
 
 use crate::blob::crc32;
 
+mod boot;
+pub use boot::{
+    BOOT_CHANNEL_LEN, BOOT_HEADER_LEN, BOOT_REPORT_PERIOD_S, BOOT_VERSION, BootReport,
+    ChannelState, boot_len, image_state,
+};
+
 /// The two bytes every frame starts with.
 pub const SYNC: [u8; 2] = [0xEB, 0x90];
 /// The frame format version.
@@ -316,12 +322,22 @@ pub struct Decoder {
     len: usize,
     next_sequence: Option<u32>,
     stats: Stats,
+    boot_reports: u64,
 }
 
 impl Default for Decoder {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// One decoded item of the stream: a data frame or a boot report ([`BootReport`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Item {
+    /// A data frame.
+    Data(Frame),
+    /// A boot report.
+    Boot(BootReport),
 }
 
 /// What the bytes at the start of the buffer are.
@@ -334,6 +350,8 @@ enum Candidate {
     Corrupt,
     /// A good frame of `len` bytes.
     Good(Frame, usize),
+    /// A good boot report of `len` bytes.
+    Boot(BootReport, usize),
 }
 
 impl Decoder {
@@ -350,6 +368,30 @@ impl Decoder {
                 skipped: 0,
                 restarts: 0,
             },
+            boot_reports: 0,
+        }
+    }
+
+    /// Boot reports decoded so far (not counted in [`Stats`], which describes the data frames).
+    pub const fn boot_reports(&self) -> u64 {
+        self.boot_reports
+    }
+
+    /// Feeds `bytes`, calling `on_item` for every good data frame and boot report completed by
+    /// them, in order.
+    pub fn feed_items(&mut self, bytes: &[u8], mut on_item: impl FnMut(Item)) {
+        for &b in bytes {
+            if self.len >= self.buf.len() {
+                self.drop_front(1);
+                self.stats.skipped += 1;
+            }
+            if let Some(slot) = self.buf.get_mut(self.len) {
+                *slot = b;
+                self.len += 1;
+            }
+            while let Some(item) = self.poll_item() {
+                on_item(item);
+            }
         }
     }
 
@@ -386,8 +428,19 @@ impl Decoder {
         self.poll()
     }
 
-    /// Looks for a complete frame in the bytes already fed.
+    /// Looks for a complete data frame in the bytes already fed (boot reports on the way are
+    /// counted and dropped; [`Decoder::feed_items`] hands them out).
     pub fn poll(&mut self) -> Option<Frame> {
+        loop {
+            match self.poll_item()? {
+                Item::Data(f) => return Some(f),
+                Item::Boot(_) => {}
+            }
+        }
+    }
+
+    /// Looks for a complete data frame or boot report in the bytes already fed.
+    fn poll_item(&mut self) -> Option<Item> {
         loop {
             match self.candidate() {
                 Candidate::Incomplete => return None,
@@ -404,7 +457,12 @@ impl Decoder {
                 Candidate::Good(frame, len) => {
                     self.drop_front(len);
                     self.count(frame.sequence);
-                    return Some(frame);
+                    return Some(Item::Data(frame));
+                }
+                Candidate::Boot(report, len) => {
+                    self.drop_front(len);
+                    self.boot_reports += 1;
+                    return Some(Item::Boot(report));
                 }
             }
         }
@@ -422,6 +480,16 @@ impl Decoder {
         let (Some(&version), Some(&k)) = (bytes.get(2), bytes.get(3)) else {
             return Candidate::Incomplete;
         };
+        if version == BOOT_VERSION && usize::from(k) <= MAX_CHANNELS {
+            let len = boot_len(usize::from(k));
+            if bytes.len() < len {
+                return Candidate::Incomplete;
+            }
+            return match BootReport::parse(bytes) {
+                Some(r) => Candidate::Boot(r, len),
+                None => Candidate::Corrupt,
+            };
+        }
         if version != VERSION || k == 0 || usize::from(k) > MAX_CHANNELS {
             return Candidate::NoFrame;
         }

@@ -1,42 +1,97 @@
-//! The model image: the blobs of one unit behind a small table, defined once for every side.
+//! The calibration image: the blobs of one unit, the board's channel table they run on, and who
+//! made them for which unit — defined once for every side.
 //!
-//! `tcomp image` writes it with [`write_image`], the firmware reads it from flash with
-//! [`Image::parse`], and the tests use both; a second copy of the layout could drift from this one
-//! without any test noticing, so there is none. Both halves are `no_std`, allocation-free and never
-//! panic: the reader takes any bytes (erased flash, a truncated upload, garbage), the writer any
-//! caller's buffer.
+//! `tcomp image --board FILE` writes it with [`ImageSpec::write`], the firmware reads it from flash
+//! with [`Image::parse`] (zero-copy: rows and strings are read from the image bytes when asked
+//! for), `tcomp inspect` prints it, and the tests use all three; a second copy of the layout could
+//! drift from this one without any test noticing, so there is none. Everything here is `no_std`,
+//! allocation-free and never panics: the reader takes any bytes (erased flash, a truncated upload,
+//! garbage), the writer any caller's buffer.
 //!
-//! # Format, version 1
-//! Everything is little-endian:
+//! # Why the channel table travels in the image
+//! The board description (which thermometer and which counter or sample source feed which
+//! channel, sensor kind, axis, unit, scale) is data the user writes once per IMU design. Carrying
+//! its compiled form in the image, next to the models that must agree with it, means one firmware
+//! runs an RLG/QMA IMU, an IFOG triad or a MEMS IMU: the board crate keeps only the hardware (which
+//! SPI, which chip selects). Generating it into the board crate instead would need a firmware
+//! build per design and would let an image meet a table it was not checked against. The image's
+//! board hash lets the firmware and `tcomp inspect` say which description an image was built for.
+//!
+//! # Format, version 2 (written by `tcomp image`)
+//! Everything is little-endian. Strings are references `(u16 offset into the pool, u16 length)`,
+//! UTF-8.
 //!
 //! ```text
-//! offset  size      field
-//! 0       4         magic  b"TCMI"
-//! 4       2         version (1)
-//! 6       2         count: entries in the table (≤ MAX_ENTRIES)
-//! 8       4         CRC-32 (ISO-HDLC, as zip/PNG) of the table bytes [12, 12 + 12·count)
-//! 12      12·count  table: channel id u16, reserved u16 (0), offset u32, length u32
-//! …                 zeros up to a multiple of 4, then the blobs in table order, each followed by
-//!                   zeros up to a multiple of 4; offsets are from the start of the image
+//! offset  size  field
+//! 0       4     magic b"TCMI"
+//! 4       2     version (2)
+//! 6       2     header length (64)
+//! 8       4     image length L (a multiple of 4)
+//! 12      4     CRC-32 (ISO-HDLC) of bytes [16, L): everything after this field
+//! 16      8     unit serial number
+//! 24      8     board-description hash: FNV-1a 64 of its canonical serialisation (table::board_hash)
+//! 32      8     creation time, seconds since 1970-01-01 UTC
+//! 40      16    tool version, UTF-8, zero-padded ("0.1.0+1a2b3c4")
+//! 56      1     thermometers nt (≤ 32)
+//! 57      1     channels nc (≤ 16)
+//! 58      1     entries ne (≤ 32)
+//! 59      1     0
+//! 60      2     string pool length P
+//! 62      2     0
+//! 64      20·nt thermometer rows: name str, adc u8, input u8, kind u8 (1 RTD, 2 NTC, 3 digital),
+//!               0 u8, three f32 constants (RTD r0, a, b; NTC r0, beta, t0 in K; digital
+//!               °C/LSB, offset °C, 0)
+//! …       56·nc channel rows: id u16, sensor u8 (0 RLG, 1 QMA, 2 IFOG, 3 MEMS gyro, 4 MEMS
+//!               accel, 5 other), source kind u8 (0 pulse counter, 1 sample source), source index
+//!               u8, inputs n u8 (≤ 4), 0 u16, scale f32, name str, axis str, unit str, then 4 ×
+//!               (input column name str, thermometer index u8, 3 × 0)
+//! …       40·ne entries: channel id u16, 0 u16, offset u32, length u32, blob CRC-32 u32,
+//!               training data file str, its FNV-1a 64 u64, training window start f32, end f32
+//!               (s, NaN when unknown), method str
+//! …       P     string pool, in row order; zeros up to a multiple of 4
+//! …             the blobs in entry order, each followed by zeros up to a multiple of 4
 //! ```
 //!
-//! The header CRC protects the table only: every blob carries its own CRC-32 (see [`crate::blob`]),
-//! so one corrupt blob disables one channel and not the image. Erased flash (`0xFF…`) or an empty
-//! region (zeros) has no magic and reads as "no image".
+//! The whole-image CRC covers every row and every blob, so a partial upload or a flipped bit is
+//! refused as a whole (the A/B slots keep the last good image); every blob still carries its own
+//! CRC-32 (see [`crate::blob`]). The reader also checks every row (strings inside the pool and
+//! UTF-8, known codes, thermometer indices, distinct channel ids, each entry on a channel of the
+//! table and at most one per channel, blobs inside the image after the pool) and that the board
+//! hash in the header is the hash of the rows it carries. It does not decode blobs: whether a blob
+//! belongs on its row (sensor kind, axis, unit, inputs) is [`ChannelRow::accepts`], which the tool
+//! runs before writing and the firmware at boot, so an entry pointing at another channel's valid
+//! blob is refused.
 //!
-//! The writer lays the blobs out exactly as above (so the same blobs always give the same bytes);
-//! the reader checks the header and the table and then only that each entry lies inside the bytes
-//! it was given, so it also reads images whose blobs are placed otherwise.
+//! # Version 1 (read only)
+//! Images written before the channel table existed: magic, version u16 (1), entry count u16,
+//! CRC-32 of the table; then per entry channel id u16, 0 u16, offset u32, length u32; then the
+//! blobs, 4-byte aligned. [`write_image`] still writes it for the reader's tests. It has no table,
+//! serial or provenance; [`Image::header`] and [`Image::channel`] give `None` for it.
+//!
+//! Erased flash (`0xFF…`) or an empty region (zeros) has no magic and reads as "no image".
+
+pub mod table;
+mod v2;
+mod write;
+
+pub use table::{
+    ChannelRow, Fnv64, Input, MAX_ROW_INPUTS, Mismatch, Provenance, Source, ThermKind, Thermometer,
+    board_hash,
+};
+pub use v2::{Header, MAX_CHANNEL_ROWS, MAX_THERMOMETER_ROWS};
+pub use write::{Entry, ImageSpec, seal};
 
 use crate::blob::crc32;
 
 /// The four bytes an image starts with.
 pub const MAGIC: [u8; 4] = *b"TCMI";
-/// The image format version written and read here.
+/// The first image format version: a table of blobs only (read, and written for tests).
 pub const VERSION: u16 = 1;
-/// Bytes before the table.
+/// The image format version `tcomp image` writes: header, channel table, provenance.
+pub const VERSION_2: u16 = 2;
+/// Bytes before the table (version 1).
 pub const HEADER_LEN: usize = 12;
-/// Bytes per table entry.
+/// Bytes per table entry (version 1).
 pub const ENTRY_LEN: usize = 12;
 /// Most entries an image may list.
 pub const MAX_ENTRIES: usize = 32;
@@ -54,7 +109,7 @@ pub enum ImageError {
     UnsupportedVersion(u16),
     /// More entries than [`MAX_ENTRIES`], or a table past the end of the region.
     BadTable,
-    /// The table's CRC does not match.
+    /// The CRC does not match: the table's (version 1) or the whole image's (version 2).
     Checksum,
     /// The image has no entry for the channel.
     Missing,
@@ -69,8 +124,20 @@ pub enum ImageError {
         /// Bytes the image needs.
         needed: usize,
     },
-    /// Writing: an offset or a length does not fit the table's 32-bit fields.
+    /// Writing: an offset or a length does not fit the table's 32-bit fields, or a string its
+    /// 16-bit fields.
     TooLarge,
+    /// A thermometer, channel or entry row holds an unknown code, a string outside the pool or
+    /// not UTF-8, a thermometer index past the list, or a non-finite number.
+    BadRow,
+    /// An entry names a channel the table does not have.
+    UnknownChannel(u16),
+    /// The header's board hash is not the hash of the rows the image carries.
+    BoardHash,
+    /// The image was made for another unit. The serials are in the image's header and the
+    /// boot report; not carried here, so that the error stays as small as the others (the
+    /// firmware keeps one per channel on its boot stack).
+    OtherUnit,
 }
 
 impl core::fmt::Display for ImageError {
@@ -79,7 +146,9 @@ impl core::fmt::Display for ImageError {
             Self::NoImage => f.write_str("no model image (erased or empty region)"),
             Self::UnsupportedVersion(v) => write!(f, "unsupported image version {v}"),
             Self::BadTable => f.write_str("image table too long"),
-            Self::Checksum => f.write_str("image table checksum mismatch"),
+            Self::Checksum => {
+                f.write_str("image checksum mismatch (the table; in version 2 the whole image)")
+            }
             Self::Missing => f.write_str("no blob for this channel in the image"),
             Self::OutOfBounds => f.write_str("blob outside the image region"),
             Self::TooManyEntries => write!(f, "at most {MAX_ENTRIES} blobs fit the image table"),
@@ -90,7 +159,11 @@ impl core::fmt::Display for ImageError {
                     "the image needs {needed} bytes, more than the buffer holds"
                 )
             }
-            Self::TooLarge => f.write_str("the image is too large for its 32-bit offsets"),
+            Self::TooLarge => f.write_str("the image or one of its strings is too large"),
+            Self::BadRow => f.write_str("malformed row in the image's channel table"),
+            Self::UnknownChannel(id) => write!(f, "channel {id} is not in the board's table"),
+            Self::BoardHash => f.write_str("board hash does not match the image's table"),
+            Self::OtherUnit => f.write_str("image made for another unit"),
         }
     }
 }
@@ -108,58 +181,165 @@ fn u32_at(b: &[u8], at: usize) -> Option<u32> {
     Some(u32::from_le_bytes(s))
 }
 
-/// A validated image header and table over the bytes of an image (e.g. a whole flash region).
+/// Which layout a parsed image has.
+#[derive(Clone, Copy, Debug)]
+enum Layout {
+    V1 { count: usize },
+    V2(v2::Layout),
+}
+
+/// A validated image over its bytes (e.g. a whole flash region): header, table and rows checked,
+/// nothing copied; rows and blobs are read from the bytes when asked for.
 #[derive(Clone, Copy, Debug)]
 pub struct Image<'a> {
     bytes: &'a [u8],
-    count: usize,
+    layout: Layout,
 }
 
 impl<'a> Image<'a> {
-    /// Checks magic, version, table size and table CRC. Never panics.
+    /// Checks magic and version, then (version 2) the whole-image CRC, every row and the board
+    /// hash, or (version 1) the table's size and CRC. Never panics.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, ImageError> {
         if bytes.get(..4) != Some(&MAGIC[..]) {
             return Err(ImageError::NoImage);
         }
         let version = u16_at(bytes, 4).ok_or(ImageError::NoImage)?;
-        if version != VERSION {
-            return Err(ImageError::UnsupportedVersion(version));
-        }
-        let count = usize::from(u16_at(bytes, 6).ok_or(ImageError::BadTable)?);
-        let crc = u32_at(bytes, 8).ok_or(ImageError::BadTable)?;
-        if count > MAX_ENTRIES {
-            return Err(ImageError::BadTable);
-        }
-        let table = bytes
-            .get(HEADER_LEN..HEADER_LEN + ENTRY_LEN * count)
-            .ok_or(ImageError::BadTable)?;
-        if crc32(table) != crc {
-            return Err(ImageError::Checksum);
-        }
-        Ok(Self { bytes, count })
+        let layout = match version {
+            VERSION => Layout::V1 {
+                count: parse_v1(bytes)?,
+            },
+            VERSION_2 => Layout::V2(v2::parse(bytes)?),
+            v => return Err(ImageError::UnsupportedVersion(v)),
+        };
+        Ok(Self { bytes, layout })
     }
 
-    /// Number of table entries.
+    /// The format version (1 or 2).
+    pub fn version(&self) -> u16 {
+        match self.layout {
+            Layout::V1 { .. } => VERSION,
+            Layout::V2(_) => VERSION_2,
+        }
+    }
+
+    /// The image's length in bytes (version 1: up to the end of its last blob).
+    pub fn byte_len(&self) -> usize {
+        match self.layout {
+            Layout::V1 { .. } => self
+                .entries()
+                .filter_map(Result::ok)
+                .map(|(_, b)| {
+                    let start = b.as_ptr() as usize - self.bytes.as_ptr() as usize;
+                    (start + b.len()).next_multiple_of(ALIGN)
+                })
+                .max()
+                .unwrap_or(first_blob_at(self.len())),
+            Layout::V2(l) => l.len,
+        }
+    }
+
+    /// Number of blob entries.
     pub fn len(&self) -> usize {
-        self.count
+        match self.layout {
+            Layout::V1 { count } => count,
+            Layout::V2(l) => l.n_entries,
+        }
     }
 
-    /// True when the table is empty.
+    /// True when the image holds no blob.
     pub fn is_empty(&self) -> bool {
-        self.count == 0
+        self.len() == 0
+    }
+
+    /// The identity fields of a version-2 image (`None` for version 1).
+    pub fn header(&self) -> Option<Header<'a>> {
+        match self.layout {
+            Layout::V1 { .. } => None,
+            Layout::V2(_) => v2::header(self.bytes),
+        }
+    }
+
+    /// Rows of the channel table (0 for version 1).
+    pub fn n_channels(&self) -> usize {
+        match self.layout {
+            Layout::V1 { .. } => 0,
+            Layout::V2(l) => l.n_chan,
+        }
+    }
+
+    /// Thermometers of the board (0 for version 1).
+    pub fn n_thermometers(&self) -> usize {
+        match self.layout {
+            Layout::V1 { .. } => 0,
+            Layout::V2(l) => l.n_therm,
+        }
+    }
+
+    /// Row `i` of the channel table.
+    pub fn channel(&self, i: usize) -> Option<ChannelRow<'a>> {
+        match &self.layout {
+            Layout::V1 { .. } => None,
+            Layout::V2(l) => v2::channel(self.bytes, l, i),
+        }
+    }
+
+    /// The row of channel `id`.
+    pub fn channel_by_id(&self, id: u16) -> Option<ChannelRow<'a>> {
+        (0..self.n_channels())
+            .filter_map(|i| self.channel(i))
+            .find(|r| r.id == id)
+    }
+
+    /// Thermometer `i` of the board.
+    pub fn thermometer(&self, i: usize) -> Option<Thermometer<'a>> {
+        match &self.layout {
+            Layout::V1 { .. } => None,
+            Layout::V2(l) => v2::thermometer(self.bytes, l, i),
+        }
+    }
+
+    /// The provenance of entry `i` (version 2).
+    pub fn provenance(&self, i: usize) -> Option<Provenance<'a>> {
+        match &self.layout {
+            Layout::V1 { .. } => None,
+            Layout::V2(l) => v2::provenance(self.bytes, l, i),
+        }
+    }
+
+    /// The blob CRC entry `i` records (version 2).
+    pub fn entry_crc(&self, i: usize) -> Option<u32> {
+        match &self.layout {
+            Layout::V1 { .. } => None,
+            Layout::V2(l) => v2::entry_crc(self.bytes, l, i),
+        }
+    }
+
+    /// Whether the image may run on the unit with serial `unit`: a version-2 image names its unit
+    /// ([`ImageError::OtherUnit`] otherwise); a version-1 image names none and is accepted.
+    pub fn check_unit(&self, unit: u64) -> Result<(), ImageError> {
+        match self.header() {
+            Some(h) if h.serial != unit => Err(ImageError::OtherUnit),
+            _ => Ok(()),
+        }
     }
 
     /// `(channel id, blob bytes)` of entry `i`; the blob always lies inside the parsed bytes.
     pub fn entry(&self, i: usize) -> Result<(u16, &'a [u8]), ImageError> {
-        if i >= self.count {
+        if i >= self.len() {
             return Err(ImageError::Missing);
         }
-        let at = HEADER_LEN + ENTRY_LEN * i;
-        let id = u16_at(self.bytes, at).ok_or(ImageError::BadTable)?;
-        let offset = u32_at(self.bytes, at + 4).ok_or(ImageError::BadTable)?;
-        let len = u32_at(self.bytes, at + 8).ok_or(ImageError::BadTable)?;
-        let offset = usize::try_from(offset).map_err(|_| ImageError::OutOfBounds)?;
-        let len = usize::try_from(len).map_err(|_| ImageError::OutOfBounds)?;
+        let (id, offset, len) = match &self.layout {
+            Layout::V1 { .. } => {
+                let at = HEADER_LEN + ENTRY_LEN * i;
+                let id = u16_at(self.bytes, at).ok_or(ImageError::BadTable)?;
+                let offset = u32_at(self.bytes, at + 4).ok_or(ImageError::BadTable)?;
+                let len = u32_at(self.bytes, at + 8).ok_or(ImageError::BadTable)?;
+                let offset = usize::try_from(offset).map_err(|_| ImageError::OutOfBounds)?;
+                let len = usize::try_from(len).map_err(|_| ImageError::OutOfBounds)?;
+                (id, offset, len)
+            }
+            Layout::V2(l) => v2::entry_span(self.bytes, l, i).ok_or(ImageError::BadTable)?,
+        };
         let blob = offset
             .checked_add(len)
             .and_then(|end| self.bytes.get(offset..end))
@@ -169,7 +349,7 @@ impl<'a> Image<'a> {
 
     /// Every entry in table order, each as [`Image::entry`] gives it.
     pub fn entries(&self) -> impl Iterator<Item = Result<(u16, &'a [u8]), ImageError>> + '_ {
-        (0..self.count).map(|i| self.entry(i))
+        (0..self.len()).map(|i| self.entry(i))
     }
 
     /// The blob of channel `id` (the first entry with that id).
@@ -182,6 +362,22 @@ impl<'a> Image<'a> {
         }
         Err(ImageError::Missing)
     }
+}
+
+/// Checks a version-1 header and table; returns the entry count.
+fn parse_v1(bytes: &[u8]) -> Result<usize, ImageError> {
+    let count = usize::from(u16_at(bytes, 6).ok_or(ImageError::BadTable)?);
+    let crc = u32_at(bytes, 8).ok_or(ImageError::BadTable)?;
+    if count > MAX_ENTRIES {
+        return Err(ImageError::BadTable);
+    }
+    let table = bytes
+        .get(HEADER_LEN..HEADER_LEN + ENTRY_LEN * count)
+        .ok_or(ImageError::BadTable)?;
+    if crc32(table) != crc {
+        return Err(ImageError::Checksum);
+    }
+    Ok(count)
 }
 
 /// Where the first blob starts for `count` entries.

@@ -156,11 +156,12 @@ fn reader_reports_each_fault() {
     assert_eq!(Image::parse(&[0; 64]).unwrap_err(), ImageError::NoImage);
     assert_eq!(Image::parse(&image[..3]).unwrap_err(), ImageError::NoImage);
 
-    let mut v2 = image.clone();
-    v2[4] = 2;
+    // Version 2 is read too (its own tests are in `image_v2.rs`); version 3 is not.
+    let mut v3 = image.clone();
+    v3[4] = 3;
     assert_eq!(
-        Image::parse(&v2).unwrap_err(),
-        ImageError::UnsupportedVersion(2)
+        Image::parse(&v3).unwrap_err(),
+        ImageError::UnsupportedVersion(3)
     );
 
     let mut flipped = image.clone();
@@ -238,7 +239,7 @@ fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
         1 => Just(Mutation::None),
         2 => prop_oneof![0u16..40, any::<u16>()].prop_map(Mutation::Count),
-        1 => prop_oneof![Just(0u16), Just(2), any::<u16>()].prop_map(Mutation::Version),
+        1 => prop_oneof![Just(0u16), Just(2), Just(3), any::<u16>()].prop_map(Mutation::Version),
         2 => (entry.clone(), 0u16..8).prop_map(|(entry, id)| Mutation::Id { entry, id }),
         3 => (entry.clone(), boundary_u32()).prop_map(|(entry, value)| Mutation::Offset { entry, value }),
         3 => (entry, boundary_u32()).prop_map(|(entry, value)| Mutation::Length { entry, value }),

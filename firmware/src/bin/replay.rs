@@ -31,15 +31,20 @@ use cortex_m::interrupt::{InterruptNumber, Mutex};
 use cortex_m::peripheral::NVIC;
 use cortex_m_rt::{ExceptionFrame, entry, exception};
 use defmt_semihosting as _;
+use tcomp_core::frame::BootReport;
 use tcomp_core::frame::MAX_FRAME_LEN;
+use tcomp_core::slots::{Active, SlotId};
 use tcomp_firmware::app::{App, ChannelConfig, IFOG1, IMU6, MAX_CHANNELS, Record, status};
+use tcomp_firmware::boot::REPORT_PERIODS;
 use tcomp_firmware::fault::{FaultKind, FaultRecord};
+use tcomp_firmware::image::check_unit;
 use tcomp_firmware::replay::{
-    Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, Vector,
+    Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, UNIT_SERIAL,
+    Vector,
 };
 use tcomp_firmware::slots::{QEMU_LAYOUT, Source, choose, validates};
 use tcomp_firmware::timing::TimeCheck;
-use tcomp_firmware::update::{MAX_REPLY, UpdateTask};
+use tcomp_firmware::update::{MAX_REPLY, UpdateTask, serial_text};
 use tcomp_firmware::{
     HASH_START, InstructionCounter, RamFlash, TIMER0_IRQ, TimeBase, Timer, UART0_RX_IRQ, Uart,
     Watchdog, exit, fold_hash,
@@ -62,7 +67,7 @@ const RUN_MAGIC: u32 = 0x52E9_1A7C;
 const UPDATE_RESET: u32 = 0x0B5E_7A11;
 /// The unit's serial number in the update protocol's INFO reply. A board reads its own; QEMU's
 /// has none, so this names the board.
-const SERIAL: &[u8] = b"QEMU-MPS2-AN386";
+const SERIAL: [u8; 18] = serial_text(UNIT_SERIAL);
 
 /// The loop's state: about 11 KB, in `.data`, never on the stack.
 static mut APP: App<'static> = App::new(&IMU6);
@@ -174,6 +179,62 @@ struct Loop {
     last_entry: u32,
     /// The first frame of this boot carries the reset cause.
     boot_flags: u16,
+    /// What this boot loaded, re-sent every `REPORT_PERIODS` samples.
+    report: BootReport,
+}
+
+impl Loop {
+    /// Sends the boot report, stamped with the next data frame's sequence number.
+    fn send_report(&mut self, sequence: u32) {
+        self.report.sequence = sequence;
+        send_report(&self.uart, &self.report);
+    }
+}
+
+/// Loads the models for this unit and returns the boot report, logged. Not inlined: its
+/// temporaries (the image's rows, the load results) live in its own frame, not in `main`'s, which
+/// stays under the sample interrupt for the whole run.
+#[inline(never)]
+fn load_models(
+    app: &mut App<'static>,
+    image: &'static [u8],
+    config: &'static [ChannelConfig],
+    vector: &Vector<'static>,
+    watchdog: bool,
+    next: u32,
+) -> BootReport {
+    let loaded = app.load_for_unit(image, UNIT_SERIAL, vector.counters, vector.thermometers);
+    let mut report = tcomp_firmware::boot::report(image, UNIT_SERIAL, config, &loaded, watchdog);
+    report.sequence = next;
+    defmt::info!(
+        "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
+        report.unit_serial,
+        report.image_version,
+        report.image_serial,
+        report.image_state,
+        report.board_hash,
+        report.image_crc
+    );
+    for (cfg, r) in config.iter().zip(loaded.iter()) {
+        if let Err(e) = r {
+            defmt::warn!(
+                "channel {=str}: no model ({}), raw passed through",
+                cfg.name,
+                e
+            );
+        }
+    }
+    report
+}
+
+/// Encodes and sends a boot report. Not inlined, so its buffer is not part of the sample
+/// interrupt's frame.
+#[inline(never)]
+fn send_report(uart: &Uart, report: &BootReport) {
+    let mut bytes = [0u8; MAX_FRAME_LEN];
+    if let Some(len) = report.encode(&mut bytes) {
+        uart.write_all(bytes.get(..len).unwrap_or(&[]));
+    }
 }
 
 impl Loop {
@@ -253,6 +314,10 @@ impl Loop {
         if let Ok(len) = frame.encode(&mut bytes) {
             self.uart.write_all(bytes.get(..len).unwrap_or(&[]));
         }
+        if (n as u32 + 1).is_multiple_of(REPORT_PERIODS) {
+            self.send_report(n as u32 + 1);
+        }
+        let r = &mut *self.run;
         r.samples += 1;
         r.next = n as u32 + 1;
         if injected & HANG != 0 {
@@ -394,33 +459,61 @@ fn main() -> ! {
         vector.counters
     );
     app.reset(config);
-    for (cfg, r) in config.iter().zip(app.load(image).iter()) {
-        if let Err(e) = r {
-            defmt::warn!(
-                "channel {=str}: no model ({}), raw passed through",
-                cfg.name,
-                e
-            );
-        }
-    }
+    let report = load_models(app, image, config, &vector, boot_flags != 0, run.next);
 
-    // The update task: UART 0's receive interrupt, below the sample timer's priority, so the loop
-    // preempts it (an erase, a chunk, the read-back CRC) at every timer edge.
-    let port = Uart::handle0();
+    let port = start_update(cp.NVIC, flash, choice.active);
+    start_loop(app, run, vector, config, cp.SYST, boot_flags, report);
+    // A byte already waiting raises the interrupt at once.
+    port.enable_rx_interrupt();
+    // SAFETY: UPDATE is set; the handler (DefaultHandler, IRQ 0) is its only user from here on.
+    unsafe { NVIC::unmask(Irq(UART0_RX_IRQ as u16)) };
+    // A board would sleep here (WFI). Under `-icount …,sleep=off` QEMU 7.2 delivers only every
+    // second CMSDK timer interrupt across a WFI (measured: two timer periods between interrupts
+    // with WFI, one when the CPU does not sleep; the timer's own INTSTATUS, polled, sets every
+    // period), so `main` spins; the run is made short by a coarser `-icount` shift instead.
+    while !DONE.load(Ordering::Acquire) {
+        cortex_m::asm::nop();
+    }
+    NVIC::mask(Irq(UART0_RX_IRQ as u16));
+    let update: *mut Option<Updater> = &raw mut UPDATE;
+    // SAFETY: the UART interrupt, UPDATE's only other user, is masked.
+    let committed = unsafe { (*update).as_ref() }.and_then(|u| u.task.committed());
+    finish(paint_bottom, paint_top, committed)
+}
+
+/// The update task: UART 0's receive interrupt, below the sample timer's priority, so the loop
+/// preempts it (an erase, a chunk, the read-back CRC) at every timer edge. Not inlined, like
+/// `start_loop`.
+#[inline(never)]
+fn start_update(mut nvic: NVIC, flash: RamFlash, active: Option<Active>) -> Uart {
     let update: *mut Option<Updater> = &raw mut UPDATE;
     // SAFETY: the UART interrupt, UPDATE's only other user, is not unmasked yet.
     unsafe {
         *update = Some(Updater {
-            task: UpdateTask::new(QEMU_LAYOUT, choice.active),
+            task: UpdateTask::new(QEMU_LAYOUT, active),
             flash,
         });
     }
-    let mut nvic = cp.NVIC;
     // SAFETY: priorities change before either interrupt is unmasked; a lower number preempts.
     unsafe {
         nvic.set_priority(Irq(TIMER0_IRQ as u16), 0x00);
         nvic.set_priority(Irq(UART0_RX_IRQ as u16), 0x80);
     }
+    Uart::handle0()
+}
+
+/// Starts the sample timer and hands the loop's state to the interrupt. Not inlined: the `Loop`
+/// is built in this frame, which is gone before the interrupt runs on top of `main`'s.
+#[inline(never)]
+fn start_loop(
+    app: &'static mut App<'static>,
+    run: &'static mut Run,
+    vector: Vector<'static>,
+    config: &'static [ChannelConfig],
+    syst: cortex_m::peripheral::SYST,
+    boot_flags: u16,
+    report: BootReport,
+) {
     let timer = Timer::timer0();
     let time = TimeBase::start();
     let board = vector.board_at(run.next as usize);
@@ -437,35 +530,30 @@ fn main() -> ! {
         timer,
         time,
         watchdog,
-        counter: InstructionCounter::new(cp.SYST),
+        counter: InstructionCounter::new(syst),
         check: TimeCheck::new(TICKS_PER_PERIOD),
         next_edge: t_start.wrapping_add(PERIOD),
         edges: 0,
         last_entry: 0,
         boot_flags,
+        report,
     };
+    send_report(&state.uart, &state.report);
     cortex_m::interrupt::free(|cs| *LOOP.borrow(cs).borrow_mut() = Some(state));
     // SAFETY: the handler (DefaultHandler, IRQ 8) only takes LOOP inside a critical section.
     unsafe { NVIC::unmask(Irq(TIMER0_IRQ as u16)) };
-    // A byte already waiting raises the interrupt at once.
-    port.enable_rx_interrupt();
-    // SAFETY: UPDATE is set; the handler (DefaultHandler, IRQ 0) is its only user from here on.
-    unsafe { NVIC::unmask(Irq(UART0_RX_IRQ as u16)) };
-    // A board would sleep here (WFI). Under `-icount …,sleep=off` QEMU 7.2 delivers only every
-    // second CMSDK timer interrupt across a WFI (measured: two timer periods between interrupts
-    // with WFI, one when the CPU does not sleep; the timer's own INTSTATUS, polled, sets every
-    // period), so `main` spins; the run is made short by a coarser `-icount` shift instead.
-    while !DONE.load(Ordering::Acquire) {
-        cortex_m::asm::nop();
-    }
-    NVIC::mask(Irq(UART0_RX_IRQ as u16));
-    // SAFETY: the UART interrupt, UPDATE's only other user, is masked.
-    let committed = unsafe { (*update).as_ref() }.and_then(|u| u.task.committed());
+}
+
+/// Stops the loop, measures the stack and prints the summary; after a committed update, resets
+/// to run the new image. Not inlined, like `start_loop`.
+#[inline(never)]
+fn finish(paint_bottom: usize, paint_top: usize, committed: Option<(SlotId, u32)>) -> ! {
     NVIC::mask(Irq(TIMER0_IRQ as u16));
     let Some(state) = cortex_m::interrupt::free(|cs| LOOP.borrow(cs).borrow_mut().take()) else {
         exit(false)
     };
     state.watchdog.stop();
+    let config = state.vector.config;
     let r = state.run;
     let peak = stack_peak(paint_bottom, paint_top);
     let stack_top = (&raw const _stack_start) as usize;
@@ -473,7 +561,7 @@ fn main() -> ! {
     let timed = r.samples.max(1);
     defmt::println!(
         "REPLAY-SUMMARY config={=u16} samples={=u32} mismatches={=u32} flagged={=u32} hash={=u32} instructions_mean={=u32} instructions_max={=u32} instructions_max_at={=u32} period_ticks={=u32} late={=u32} missed={=u32} watchdog_resets={=u32} stack_bytes={=u32}",
-        vector.config,
+        config,
         r.samples,
         r.mismatches,
         r.flagged,
@@ -544,11 +632,15 @@ fn on_receive() {
     port.clear_rx_interrupt();
     let mut reply = [0u8; MAX_REPLY];
     while let Some(byte) = port.read() {
-        let validate =
-            |f: &mut RamFlash, off, len| f.bytes(off, len).is_some_and(|b| validates(b, 0, len));
+        // The new image must read and be made for this unit: an image for another unit is
+        // refused before the commit, so the unit keeps its models.
+        let validate = |f: &mut RamFlash, off, len| {
+            f.bytes(off, len)
+                .is_some_and(|b| validates(b, 0, len) && check_unit(b, UNIT_SERIAL).is_ok())
+        };
         if let Some(n) = u
             .task
-            .push(byte, &mut u.flash, SERIAL, validate, &mut reply)
+            .push(byte, &mut u.flash, &SERIAL, validate, &mut reply)
         {
             // Whole, between two frames of the loop: the timer interrupt waits for these bytes.
             cortex_m::interrupt::free(|_| port.write_all(reply.get(..n).unwrap_or(&[])));

@@ -9,7 +9,7 @@ use clap::Args as ClapArgs;
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use tcomp_core::frame::{Decoder, Frame, Stats, status};
+use tcomp_core::frame::{BootReport, Decoder, Frame, Item, Stats, image_state, status};
 
 /// Arguments of `tcomp frames`.
 #[derive(ClapArgs)]
@@ -51,6 +51,44 @@ fn stats_json(s: &Stats) -> serde_json::Value {
     })
 }
 
+/// A boot report: the unit, the image it runs and each channel's model state.
+fn report_json(r: &BootReport) -> serde_json::Value {
+    let image_state = match r.image_state {
+        image_state::OK => "ok",
+        image_state::NONE => "no image",
+        image_state::OTHER_UNIT => "made for another unit",
+        image_state::INVALID => "invalid",
+        image_state::TABLE => "channel table refused by the board",
+        _ => "unknown",
+    };
+    // The firmware's `LoadError::code`.
+    let model = |s: u8| match s {
+        0 => "loaded",
+        1 => "no blob in the image",
+        2 => "image made for another unit",
+        3 => "image unreadable",
+        4 => "blob rejected",
+        5 => "an input has no thermometer",
+        6 => "channel table refused",
+        7 => "channel not in the image's table",
+        8 => "blob made for another channel",
+        _ => "unknown",
+    };
+    json!({
+        "next_sequence": r.sequence,
+        "unit_serial": r.unit_serial,
+        "image_serial": r.image_serial,
+        "image_version": r.image_version,
+        "image_state": image_state,
+        "board_hash": format!("{:016x}", r.board_hash),
+        "image_crc": format!("{:08x}", r.image_crc),
+        "watchdog_reset": r.flags & 1 != 0,
+        "channels": r.channels().iter().map(|c| json!({
+            "id": c.id, "state": c.state, "model": model(c.state),
+        })).collect::<Vec<_>>(),
+    })
+}
+
 fn csv(frames: &[Frame]) -> String {
     let width = frames.iter().map(|f| f.channels().len()).max().unwrap_or(0);
     let mut out = String::from("time_s,sequence");
@@ -79,7 +117,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         std::fs::read(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
     let mut decoder = Decoder::new();
     let mut frames = Vec::new();
-    decoder.feed(&bytes, |f| frames.push(f));
+    let mut reports = Vec::new();
+    decoder.feed_items(&bytes, |i| match i {
+        Item::Data(f) => frames.push(f),
+        Item::Boot(r) => reports.push(r),
+    });
     let stats = decoder.stats();
     if args.json {
         let list: Vec<_> = frames
@@ -108,11 +150,16 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let value = json!({
             "file": args.file.display().to_string(),
             "stats": stats_json(&stats),
+            "boot_reports": reports.iter().map(report_json).collect::<Vec<_>>(),
             "frames": list,
         });
         outln!("{}", serde_json::to_string_pretty(&value)?);
     } else {
         out!("{}", csv(&frames));
+        // Boot reports on stderr, beside the counts: the CSV on stdout stays one table.
+        for r in &reports {
+            eprintln!("boot report: {}", report_json(r));
+        }
         eprintln!(
             "{} frames, {} lost (sequence gaps), {} corrupt (CRC), {} bytes skipped, {} restarts",
             stats.frames, stats.lost, stats.corrupt, stats.skipped, stats.restarts

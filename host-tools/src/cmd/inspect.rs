@@ -1,4 +1,6 @@
-//! `tcomp inspect MODEL`: print what a blob holds; a corrupt blob is named as such, with the reason.
+//! `tcomp inspect FILE`: print what a blob holds; a corrupt blob is named as such, with the reason.
+//! A calibration image (`tcomp image`'s output, told apart by its magic) is printed by
+//! [`super::inspect_image`].
 //!
 //! Every string taken from the blob goes through [`super::printable`], in the table and in `--json`:
 //! a blob is a file from elsewhere, and its strings must not drive the terminal.
@@ -11,7 +13,7 @@ use super::printable::text;
 /// Arguments of `tcomp inspect`.
 #[derive(ClapArgs)]
 pub struct Args {
-    /// The model blob (.tcm).
+    /// The model blob (.tcm) or calibration image (`tcomp image`'s output).
     pub model: PathBuf,
     /// Print JSON instead of the human summary.
     #[arg(long)]
@@ -21,6 +23,9 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let bytes = tcomp_train::blob_io::read(&args.model)?;
+    if bytes.starts_with(&tcomp_core::image::MAGIC) {
+        return super::inspect_image::run(&args.model, &bytes, args.json);
+    }
     let m = tcomp_train::blob_io::decode(&args.model, &bytes)?;
     let nf = m.n_features();
     let centers: Vec<_> = m

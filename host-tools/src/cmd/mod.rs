@@ -27,6 +27,7 @@ pub mod flash;
 pub mod frames;
 pub mod image;
 pub mod inspect;
+mod inspect_image;
 mod output;
 mod printable;
 mod progress;

@@ -7,10 +7,13 @@ use crate::{TARGET, cargo, field};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use tcomp_core::frame::Decoder;
+use tcomp_core::frame::{BootReport, Decoder, Item, boot_len, image_state};
 use tcomp_firmware::app::{IFOG1, IMU6, PERIOD_S, status};
+use tcomp_firmware::boot::REPORT_PERIODS;
 use tcomp_firmware::image::Image;
-use tcomp_firmware::replay::{CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TIME_GLITCH};
+use tcomp_firmware::replay::{
+    CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TIME_GLITCH, UNIT_SERIAL,
+};
 
 /// Budgets, from the issue and the part. Instructions: the worst 6-channel sample with every model
 /// evaluated every sample (no stagger): 11,360 measured. Flash: an STM32F405/407 has 1 MiB, less
@@ -74,28 +77,44 @@ fn fit_models(work: &Path) -> Result<()> {
     ];
     for (preset, target, reference, signal, features) in fits {
         tcomp(work, &["simulate", "--preset", preset, "--out", preset])?;
-        let data = format!("{preset}/train.csv");
-        let out = format!("{preset}.tcm");
-        let mut args = vec![
-            "fit",
-            "--data",
-            &data,
-            "--target",
-            target,
-            "--reference",
-            reference,
-            "--signal",
-            signal,
-            "--centers",
-            "32",
-            "--out",
-            &out,
-            "--quiet",
-        ];
-        for f in &features {
-            args.extend_from_slice(&["--feature", f]);
+        // One blob per channel: the numbers are the preset's, the metadata (sensor kind, axis,
+        // unit) the channel's row in the board description, which `tcomp image --board` and the
+        // firmware check each blob against.
+        let (sensor, unit, axes): (&str, &str, &[&str]) = match preset {
+            "rlg" => ("rlg", "deg/h", &["x", "y", "z"]),
+            "qma" => ("qma", "ug", &["x", "y", "z"]),
+            _ => ("ifog", "deg/h", &["x"]),
+        };
+        for axis in axes {
+            let data = format!("{preset}/train.csv");
+            let out = format!("{preset}-{axis}.tcm");
+            let mut args = vec![
+                "fit",
+                "--data",
+                &data,
+                "--target",
+                target,
+                "--reference",
+                reference,
+                "--signal",
+                signal,
+                "--centers",
+                "32",
+                "--sensor",
+                sensor,
+                "--axis",
+                axis,
+                "--unit",
+                unit,
+                "--out",
+                &out,
+                "--quiet",
+            ];
+            for f in &features {
+                args.extend_from_slice(&["--feature", f]);
+            }
+            tcomp(work, &args)?;
         }
-        tcomp(work, &args)?;
     }
     Ok(())
 }
@@ -158,10 +177,14 @@ fn run_qemu(elf: &Path, image: &Path, vector: &Path, uart: &Path) -> Result<Stri
 /// Decodes every frame of the UART capture with the core's decoder and compares each with the
 /// host's frame of the same sequence number, byte for byte (values as f64 bits, status words with
 /// the board's bits, timestamps). Returns the frames decoded.
-fn compare_frames(capture: &[u8], expected: &[Vec<u8>]) -> Result<usize> {
+fn compare_frames(capture: &[u8], expected: &[Vec<u8>]) -> Result<(usize, Vec<BootReport>)> {
     let mut decoder = Decoder::new();
     let mut frames = Vec::new();
-    decoder.feed(capture, |f| frames.push(f));
+    let mut reports = Vec::new();
+    decoder.feed_items(capture, |i| match i {
+        Item::Data(f) => frames.push(f),
+        Item::Boot(r) => reports.push(r),
+    });
     let stats = decoder.stats();
     let mut mismatches = 0;
     let mut first = None;
@@ -185,14 +208,52 @@ fn compare_frames(capture: &[u8], expected: &[Vec<u8>]) -> Result<usize> {
             frames.len(),
         );
     }
-    let sent: usize = expected.iter().map(Vec::len).sum();
+    let reported: usize = reports.iter().map(|r| boot_len(r.channels().len())).sum();
+    let sent: usize = expected.iter().map(Vec::len).sum::<usize>() + reported;
     if capture.len() != sent {
         bail!(
-            "UART capture is {} B, the host's frames {sent} B",
+            "UART capture is {} B, the host's frames and the boot reports {sent} B",
             capture.len()
         );
     }
-    Ok(frames.len())
+    Ok((frames.len(), reports))
+}
+
+/// The boot reports of a run: one per boot (`boots`) plus one every `REPORT_PERIODS` served
+/// samples, each naming this unit, the image made for it, and per channel the load state the
+/// host's loop had (`states`); the report after a watchdog reset says so.
+fn check_reports(
+    reports: &[BootReport],
+    boots: usize,
+    served: &[bool],
+    states: &[u8],
+) -> Result<()> {
+    let periodic = served
+        .iter()
+        .enumerate()
+        .filter(|&(n, &s)| s && (n as u32 + 1).is_multiple_of(REPORT_PERIODS))
+        .count();
+    if reports.len() != boots + periodic {
+        bail!(
+            "{} boot reports, expected {boots} boots + {periodic} periodic",
+            reports.len()
+        );
+    }
+    for r in reports {
+        let got: Vec<u8> = r.channels().iter().map(|c| c.state).collect();
+        if r.unit_serial != UNIT_SERIAL
+            || r.image_serial != UNIT_SERIAL
+            || r.image_version != 2
+            || r.image_state != image_state::OK
+            || got != states
+        {
+            bail!("boot report {r:?}: expected unit {UNIT_SERIAL:#x}, image v2, states {states:?}");
+        }
+    }
+    if boots > 1 && !reports.iter().any(|r| r.flags & 1 != 0) {
+        bail!("no boot report says the watchdog reset the unit");
+    }
+    Ok(())
 }
 
 /// The firmware's summary numbers of one run.
@@ -274,21 +335,54 @@ pub fn qemu() -> Result<()> {
             ],
         )?;
     }
-    let mut model_args = vec!["image".to_string()];
-    for (id, m) in ["rlg", "rlg", "rlg", "qma", "qma", "qma", "ifog-shupe"]
+    // The images, made as a user makes them: the shipped board descriptions, the unit serial the
+    // replay board reports, a pinned creation time so the bytes are reproducible.
+    let serial = tcomp_firmware::replay::UNIT_SERIAL.to_string();
+    let descriptions = root.join("firmware/descriptions");
+    let imu6_board = descriptions.join("imu6-rlg-qma.toml");
+    let ifog_board = descriptions.join("ifog1.toml");
+    let mut model_args: Vec<String> = vec!["image".into(), "--board".into()];
+    model_args.push(imu6_board.to_str().context("path")?.into());
+    for (id, m) in ["rlg-x", "rlg-y", "rlg-z", "qma-x", "qma-y", "qma-z"]
         .iter()
         .enumerate()
     {
         model_args.extend(["--model".into(), format!("{id}={m}.tcm")]);
     }
+    model_args.extend([
+        "--serial".into(),
+        serial.clone(),
+        "--created".into(),
+        "0".into(),
+    ]);
     model_args.extend(["--out".into(), "models.bin".into()]);
     tcomp(
         &work,
         &model_args.iter().map(String::as_str).collect::<Vec<_>>(),
     )?;
+    let ifog_board = ifog_board.to_str().context("path")?;
+    tcomp(
+        &work,
+        &[
+            "image",
+            "--board",
+            ifog_board,
+            "--model",
+            "0=ifog-shupe-x.tcm",
+            "--serial",
+            &serial,
+            "--created",
+            "0",
+            "--out",
+            "models-ifog.bin",
+        ],
+    )?;
     let image = std::fs::read(work.join("models.bin"))?;
+    let ifog_image = std::fs::read(work.join("models-ifog.bin"))?;
 
-    // A second image with QMA z's blob corrupted: one flipped byte in its middle.
+    // A second image with QMA z's blob corrupted: one flipped byte in its middle, the image
+    // re-sealed (its whole-image CRC recomputed), so that the blob's own CRC is what refuses it
+    // and only that channel runs without a model.
     let mut corrupt = image.clone();
     let table = Image::parse(&image).map_err(|e| anyhow::anyhow!("image: {e:?}"))?;
     let (_, blob) = table
@@ -296,6 +390,7 @@ pub fn qemu() -> Result<()> {
         .map_err(|e| anyhow::anyhow!("image: {e:?}"))?;
     let at = blob.as_ptr() as usize - image.as_ptr() as usize + blob.len() / 2;
     corrupt[at] ^= 0x10;
+    tcomp_core::image::seal(&mut corrupt).map_err(|e| anyhow::anyhow!("image: {e:?}"))?;
     std::fs::write(work.join("models-corrupt.bin"), &corrupt)?;
 
     // IMU6 vector: three RLG axes from one 200 Hz slice (offset rows), three QMA axes likewise.
@@ -379,7 +474,7 @@ pub fn qemu() -> Result<()> {
     for n in 5000..5003 {
         ifog_in.therm_faults[0][n] = true;
     }
-    let c = build(CONFIG_IFOG1, &IFOG1, &ifog_in, &image)?;
+    let c = build(CONFIG_IFOG1, &IFOG1, &ifog_in, &ifog_image)?;
 
     let fault = status::SENSOR_ERROR | status::INPUT_FAULT;
     let sa = &a.statuses;
@@ -515,7 +610,7 @@ pub fn qemu() -> Result<()> {
         (
             "ifog1",
             &c.bytes,
-            "models.bin",
+            "models-ifog.bin",
             c.hash,
             &c.frames,
             &c.served,
@@ -529,8 +624,20 @@ pub fn qemu() -> Result<()> {
         let text = run_qemu(&elf, &work.join(image), &path, &uart)?;
         let s = check(&text, hash, served.iter().filter(|&&s| s).count())?;
         let capture = std::fs::read(&uart).with_context(|| format!("{}", uart.display()))?;
-        let n = compare_frames(&capture, expected)?;
+        let (n, reports) = compare_frames(&capture, expected)?;
         println!("{name}: {n} UART frames decoded, each identical to the host's");
+        let boots = if name.starts_with("imu6") { 2 } else { 1 };
+        // QMA z's corrupt blob: refused by its own CRC (LoadError::Blob, code 4).
+        let states: &[u8] = match name {
+            "imu6" => &[0; 6],
+            "imu6-corrupt-blob" => &[0, 0, 0, 0, 0, 4],
+            _ => &[0],
+        };
+        check_reports(&reports, boots, served, states)?;
+        println!(
+            "{name}: {} boot reports (unit {UNIT_SERIAL:#x}, image v2, every channel as loaded)",
+            reports.len()
+        );
         // Both IMU6 runs replay the same inputs: one stalled sample, one missed period (its
         // sample late too) and one hang each.
         let (want_late, want_missed, want_resets) = if name.starts_with("imu6") {

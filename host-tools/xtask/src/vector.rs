@@ -9,8 +9,8 @@ use tcomp_firmware::app::{
     App, ChannelConfig, QMA_UG_PER_HZ, RLG_ARCSEC_PER_PULSE, Record, status,
 };
 use tcomp_firmware::replay::{
-    COUNTER_FLAG_SHIFT, HANG, HEADER_LEN, MAGIC, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, VERSION,
-    Vector,
+    COUNTER_FLAG_SHIFT, HANG, HEADER_LEN, MAGIC, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD,
+    UNIT_SERIAL, VERSION, Vector,
 };
 
 /// Largest jitter of the replayed latch instants, ticks of 25 MHz (±40 µs, ±0.8 % of a period):
@@ -207,7 +207,8 @@ pub fn build<const K: usize>(
     let (outputs, frames, statuses, served) = {
         let v = Vector::parse(&bytes).map_err(|e| anyhow::anyhow!("vector: {e:?}"))?;
         let mut app = App::new(config);
-        for (c, r) in config.iter().zip(app.load(image)) {
+        let loaded = app.load_for_unit(image, UNIT_SERIAL, v.counters, v.thermometers);
+        for (c, r) in config.iter().zip(loaded) {
             if let Err(e) = r {
                 eprintln!("host: channel {}: no model ({e:?})", c.name);
             }

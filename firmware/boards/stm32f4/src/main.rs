@@ -50,6 +50,27 @@ fn models_image() -> &'static [u8] {
     choice.image
 }
 
+/// Start of the STM32F4's one-time-programmable area (RM0090 §3.8: 512 bytes in 16 blocks of
+/// 32 bytes, and a lock byte per block at 0x1FFF_7A00). Block 0's first 8 bytes hold the unit
+/// serial, programmed once at manufacturing and then locked: unlike the factory's 96-bit device
+/// id (0x1FFF_7A10), it is the number on the unit's label, which `tcomp image --serial` takes; and
+/// OTP survives every firmware and image update, so an image cannot be moved to another unit by
+/// reflashing it.
+const OTP_SERIAL: usize = 0x1FFF_7800;
+
+/// The unit's serial (little-endian u64 at [`OTP_SERIAL`]); all ones on a unit whose OTP was never
+/// programmed, which no image names, so such a unit runs every channel with `NO_MODEL` and its
+/// boot report says "image made for another unit".
+pub fn unit_serial() -> u64 {
+    let mut b = [0u8; 8];
+    for (i, byte) in b.iter_mut().enumerate() {
+        // SAFETY: the OTP area is always mapped and readable on the STM32F405/407; reading it has
+        // no side effect.
+        *byte = unsafe { core::ptr::read_volatile((OTP_SERIAL + i) as *const u8) };
+    }
+    u64::from_le_bytes(b)
+}
+
 /// Bytes the UART queue holds (511 usable): six 84-byte six-channel frames. At 921,600
 /// baud one frame takes 0.9 ms, so the queue never fills unless the line is stalled.
 const TX_QUEUE: usize = 512;
@@ -62,8 +83,9 @@ mod app {
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::serial::{TxISR, TxListen};
     use stm32f4xx_hal::timer::Flag;
-    use tcomp_core::frame::MAX_FRAME_LEN;
+    use tcomp_core::frame::{BootReport, MAX_FRAME_LEN};
     use tcomp_firmware::app::{App, IMU6, MAX_CHANNELS, Record, status};
+    use tcomp_firmware::boot::REPORT_PERIODS;
 
     use crate::setup::{
         self, CYCLES_PER_PERIOD, Counters, FrameTx, SampleTimer, Spi1Bus, TICK_HZ, TICKS_PER_PERIOD,
@@ -83,6 +105,8 @@ mod app {
         producer: Producer<'static, u8>,
         consumer: Consumer<'static, u8>,
         tx: FrameTx,
+        /// What this boot loaded: sent first, then every `REPORT_PERIODS` periods.
+        report: BootReport,
     }
 
     #[init(local = [
@@ -114,7 +138,29 @@ mod app {
             );
         }
         let app = cx.local.app_state;
-        let loaded = app.load(crate::models_image());
+        let unit = crate::unit_serial();
+        let image = crate::models_image();
+        let loaded = app.load_for_unit(
+            image,
+            unit,
+            tcomp_firmware::app::MAX_COUNTERS,
+            crate::setup::THERMOMETERS,
+        );
+        let watchdog = matches!(
+            devices.reset_cause,
+            crate::fault::ResetCause::WindowWatchdog
+                | crate::fault::ResetCause::IndependentWatchdog
+        );
+        let report = tcomp_firmware::boot::report(image, unit, &IMU6, &loaded, watchdog);
+        defmt::info!(
+            "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
+            report.unit_serial,
+            report.image_version,
+            report.image_serial,
+            report.image_state,
+            report.board_hash,
+            report.image_crc
+        );
         for (cfg, r) in IMU6.iter().zip(loaded.iter()) {
             match r {
                 Ok(()) => defmt::info!("channel {=str}: model loaded", cfg.name),
@@ -137,6 +183,7 @@ mod app {
                 producer,
                 consumer,
                 tx: devices.tx,
+                report,
             },
         )
     }
@@ -150,7 +197,7 @@ mod app {
 
     /// One loop period, on TIM2's update.
     #[task(binds = TIM2, priority = 2, local = [
-        app, thermometers, counters, timer, watchdog, producer,
+        app, thermometers, counters, timer, watchdog, producer, report,
         sequence: u32 = 0, periods: u64 = 0, overruns: u32 = 0, dropped: u32 = 0, late: bool = false,
         missed: u32 = 0, last_cycles: Option<u32> = None,
     ])]
@@ -188,6 +235,19 @@ mod app {
             // The previous period overran: this sample was taken late.
             for r in &mut records {
                 r.status |= status::OVERRUN;
+            }
+        }
+        if l.sequence.is_multiple_of(REPORT_PERIODS) {
+            // At boot and every 10 s, before the data frame it announces (never on the loop's
+            // timed path: the sample is done).
+            l.report.sequence = *l.sequence;
+            let mut buf = [0u8; MAX_FRAME_LEN];
+            if let Some(len) = l.report.encode(&mut buf)
+                && l.producer.capacity() - l.producer.len() >= len
+            {
+                for &b in buf.get(..len).unwrap_or(&[]) {
+                    let _ = l.producer.enqueue(b);
+                }
             }
         }
         let frame = l.app.frame(

@@ -1,0 +1,166 @@
+//! The boot report: what the unit runs, sent over the same serial link as the data frames.
+//!
+//! A user who plugs a terminal into a running unit must be able to see which calibration it runs
+//! without resetting it, so the firmware sends this frame at boot and then every
+//! [`BOOT_REPORT_PERIOD_S`] seconds. It shares the data frames' sync word and CRC but has its own
+//! version byte ([`BOOT_VERSION`]), so a decoder that only knows data frames skips it like any
+//! other non-frame bytes, and data frames' bytes are unchanged.
+//!
+//! # Layout (little-endian)
+//!
+//! ```text
+//! offset    size  field
+//! 0         2     sync word 0xEB 0x90
+//! 2         1     kind and version: 0x81 (boot report, version 1)
+//! 3         1     channel count K (0..=8)
+//! 4         4     sequence number of the next data frame (the report does not consume one)
+//! 8         8     the unit's serial
+//! 16        8     the image's unit serial (0 without a version-2 image)
+//! 24        8     the image's board-description hash (0 without one)
+//! 32        4     the image's whole-image CRC (0 without one)
+//! 36        2     image format version (0: no image)
+//! 38        1     image state (0 ok, 1 no image, 2 made for another unit, 3 invalid, 4 its
+//!                 channel table refused by this board)
+//! 39        1     flags: bit 0 the boot followed a watchdog reset
+//! 40        3·K   per channel: channel id u16, model state u8 (0 loaded, else the reason, see
+//!                 the firmware's `LoadError::code`)
+//! 40 + 3K   4     CRC-32 of bytes 2 .. 40 + 3K
+//! ```
+
+use super::{MAX_CHANNELS, SYNC, le_u32, le_u64};
+use crate::blob::crc32;
+
+/// The version byte of a boot report (the data frames' is 1).
+pub const BOOT_VERSION: u8 = 0x81;
+/// How often the firmware repeats the report, seconds. Ten seconds: a user attaching a terminal
+/// sees it within the time it takes to look at the screen, and at 200 Hz it costs one 64-byte
+/// frame per 2,000 data frames (0.04 % of the link).
+pub const BOOT_REPORT_PERIOD_S: u32 = 10;
+/// Bytes before the channels.
+pub const BOOT_HEADER_LEN: usize = 40;
+/// Bytes per channel.
+pub const BOOT_CHANNEL_LEN: usize = 3;
+
+/// Length of a boot report of `channels` channels.
+pub const fn boot_len(channels: usize) -> usize {
+    BOOT_HEADER_LEN + BOOT_CHANNEL_LEN * channels + super::CRC_LEN
+}
+
+/// The image state of a boot report.
+pub mod image_state {
+    /// The image was read and its table accepted.
+    pub const OK: u8 = 0;
+    /// No image (erased or empty region).
+    pub const NONE: u8 = 1;
+    /// The image was made for another unit.
+    pub const OTHER_UNIT: u8 = 2;
+    /// The image is corrupt or unreadable.
+    pub const INVALID: u8 = 3;
+    /// The image's channel table does not fit this board.
+    pub const TABLE: u8 = 4;
+}
+
+/// One channel's line of a boot report.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ChannelState {
+    /// Channel id.
+    pub id: u16,
+    /// 0: model loaded; otherwise why not.
+    pub state: u8,
+}
+
+/// A boot report's content.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BootReport {
+    /// The next data frame's sequence number.
+    pub sequence: u32,
+    /// The unit's serial.
+    pub unit_serial: u64,
+    /// The image's unit serial.
+    pub image_serial: u64,
+    /// The image's board hash.
+    pub board_hash: u64,
+    /// The image's whole-image CRC.
+    pub image_crc: u32,
+    /// The image's format version (0: none).
+    pub image_version: u16,
+    /// [`image_state`].
+    pub image_state: u8,
+    /// Bit 0: watchdog reset.
+    pub flags: u8,
+    channels: [ChannelState; MAX_CHANNELS],
+    count: u8,
+}
+
+impl BootReport {
+    /// Sets the channel lines (the first [`MAX_CHANNELS`] of `channels`).
+    pub fn set_channels(&mut self, channels: &[ChannelState]) {
+        self.count = 0;
+        for (slot, c) in self.channels.iter_mut().zip(channels) {
+            *slot = *c;
+            self.count += 1;
+        }
+    }
+
+    /// The channel lines.
+    pub fn channels(&self) -> &[ChannelState] {
+        self.channels.get(..usize::from(self.count)).unwrap_or(&[])
+    }
+
+    /// Writes the report into the start of `out`; returns its length, or `None` when `out` is
+    /// too short.
+    pub fn encode(&self, out: &mut [u8]) -> Option<usize> {
+        let k = usize::from(self.count);
+        let len = boot_len(k);
+        let out = out.get_mut(..len)?;
+        let mut w = super::Writer { buf: out, at: 0 };
+        w.put(&SYNC);
+        w.put(&[BOOT_VERSION, self.count]);
+        w.put(&self.sequence.to_le_bytes());
+        w.put(&self.unit_serial.to_le_bytes());
+        w.put(&self.image_serial.to_le_bytes());
+        w.put(&self.board_hash.to_le_bytes());
+        w.put(&self.image_crc.to_le_bytes());
+        w.put(&self.image_version.to_le_bytes());
+        w.put(&[self.image_state, self.flags]);
+        for c in self.channels() {
+            w.put(&c.id.to_le_bytes());
+            w.put(&[c.state]);
+        }
+        let crc = crc32(w.buf.get(SYNC.len()..w.at)?);
+        w.put(&crc.to_le_bytes());
+        Some(len)
+    }
+
+    /// Parses one complete report at the start of `bytes` (sync, version, CRC checked).
+    pub(super) fn parse(bytes: &[u8]) -> Option<Self> {
+        let k = usize::from(*bytes.get(3)?);
+        if bytes.get(2) != Some(&BOOT_VERSION) || k > MAX_CHANNELS {
+            return None;
+        }
+        let end = boot_len(k) - super::CRC_LEN;
+        if crc32(bytes.get(SYNC.len()..end)?) != le_u32(bytes, end)? {
+            return None;
+        }
+        let mut r = Self {
+            sequence: le_u32(bytes, 4)?,
+            unit_serial: le_u64(bytes, 8)?,
+            image_serial: le_u64(bytes, 16)?,
+            board_hash: le_u64(bytes, 24)?,
+            image_crc: le_u32(bytes, 32)?,
+            image_version: u16::from_le_bytes([*bytes.get(36)?, *bytes.get(37)?]),
+            image_state: *bytes.get(38)?,
+            flags: *bytes.get(39)?,
+            ..Self::default()
+        };
+        for (i, c) in r.channels.iter_mut().enumerate().take(k) {
+            let at = BOOT_HEADER_LEN + BOOT_CHANNEL_LEN * i;
+            *c = ChannelState {
+                id: u16::from_le_bytes([*bytes.get(at)?, *bytes.get(at + 1)?]),
+                state: *bytes.get(at + 2)?,
+            };
+        }
+        r.count = u8::try_from(k).ok()?;
+        Some(r)
+    }
+}

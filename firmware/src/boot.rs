@@ -1,0 +1,58 @@
+//! The boot report: which image, made for which unit and board, and what each channel runs, sent
+//! at boot and every [`REPORT_PERIODS`] samples in the frames (`tcomp_core::frame::BootReport`),
+//! and over defmt by the boards, so a user can see what the unit runs without resetting it.
+//!
+//! Built once at boot from the load results; the loop only re-stamps and re-sends it, never on
+//! the sample's own path (the instruction budget covers `App::sample_snapshot` alone).
+
+use crate::app::{ChannelConfig, LoadError, PERIOD_S};
+use crate::image::{Image, ImageError};
+use tcomp_core::frame::{BOOT_REPORT_PERIOD_S, BootReport, ChannelState, image_state};
+
+/// Samples between two reports: [`BOOT_REPORT_PERIOD_S`] at the loop's rate.
+pub const REPORT_PERIODS: u32 = (BOOT_REPORT_PERIOD_S as f32 / PERIOD_S) as u32;
+
+/// The report of a boot that read `image` on the unit `unit_serial`, with each channel of `config`
+/// loaded as `loaded` says; `watchdog` when the boot followed a watchdog reset. Not inlined: a
+/// boot path keeps its frame off the model decoder's stack.
+#[inline(never)]
+pub fn report(
+    image: &[u8],
+    unit_serial: u64,
+    config: &[ChannelConfig],
+    loaded: &[Result<(), LoadError>],
+    watchdog: bool,
+) -> BootReport {
+    let mut r = BootReport::default();
+    r.unit_serial = unit_serial;
+    r.flags = u8::from(watchdog);
+    match Image::parse(image) {
+        Ok(i) => {
+            r.image_version = i.version();
+            if let Some(h) = i.header() {
+                r.image_serial = h.serial;
+                r.board_hash = h.board_hash;
+                r.image_crc = h.crc;
+            }
+            r.image_state = match i.check_unit(unit_serial) {
+                Err(_) => image_state::OTHER_UNIT,
+                Ok(()) if loaded.iter().any(|l| matches!(l, Err(LoadError::Table(_)))) => {
+                    image_state::TABLE
+                }
+                Ok(()) => image_state::OK,
+            };
+        }
+        Err(ImageError::NoImage) => r.image_state = image_state::NONE,
+        Err(_) => r.image_state = image_state::INVALID,
+    }
+    let mut channels = [ChannelState::default(); tcomp_core::frame::MAX_CHANNELS];
+    for ((c, cfg), l) in channels.iter_mut().zip(config).zip(loaded) {
+        *c = ChannelState {
+            id: cfg.id,
+            state: LoadError::code(l),
+        };
+    }
+    let n = config.len().min(loaded.len()).min(channels.len());
+    r.set_channels(channels.get(..n).unwrap_or(&[]));
+    r
+}
