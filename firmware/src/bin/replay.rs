@@ -34,7 +34,9 @@ use defmt_semihosting as _;
 use tcomp_core::frame::BootReport;
 use tcomp_core::frame::MAX_FRAME_LEN;
 use tcomp_core::slots::{Active, SlotId};
-use tcomp_firmware::app::{App, ChannelConfig, IFOG1, IMU6, MAX_CHANNELS, Record, status};
+use tcomp_firmware::app::{
+    App, ChannelConfig, IFOG1, IMU6, LoadError, MAX_CHANNELS, Record, status,
+};
 use tcomp_firmware::boot::REPORT_PERIODS;
 use tcomp_firmware::fault::{FaultKind, FaultRecord};
 use tcomp_firmware::image::check_unit;
@@ -82,6 +84,10 @@ static LOOP: Mutex<RefCell<Option<Loop>>> = Mutex::new(RefCell::new(None));
 /// The update task and the flash it writes, owned by UART 0's receive interrupt once `main` has set
 /// it (about 400 B: one protocol frame of receive buffer and the receiver's state).
 static mut UPDATE: Option<Updater> = None;
+/// The boot report, written once by `load_models` and re-sent by the loop every
+/// [`REPORT_PERIODS`]. A static rather than a value `main` hands on, so no copy of it lies in
+/// `main`'s frame under the model decoder's (the boot's stack peak).
+static mut REPORT: BootReport = BootReport::EMPTY;
 /// Set by the sample interrupt after the vector's last sample.
 static DONE: AtomicBool = AtomicBool::new(false);
 
@@ -180,31 +186,39 @@ struct Loop {
     /// The first frame of this boot carries the reset cause.
     boot_flags: u16,
     /// What this boot loaded, re-sent every `REPORT_PERIODS` samples.
-    report: BootReport,
+    report: &'static mut BootReport,
 }
 
 impl Loop {
     /// Sends the boot report, stamped with the next data frame's sequence number.
     fn send_report(&mut self, sequence: u32) {
         self.report.sequence = sequence;
-        send_report(&self.uart, &self.report);
+        send_report(&self.uart, self.report);
     }
 }
 
-/// Loads the models for this unit and returns the boot report, logged. Not inlined: its
-/// temporaries (the image's rows, the load results) live in its own frame, not in `main`'s, which
-/// stays under the sample interrupt for the whole run.
+/// Decodes the models (the boot's stack peak: the decoder's frame lies on top of this one's).
 #[inline(never)]
-fn load_models(
+fn load(
     app: &mut App<'static>,
     image: &'static [u8],
-    config: &'static [ChannelConfig],
     vector: &Vector<'static>,
+) -> [Result<(), LoadError>; MAX_CHANNELS] {
+    app.load_for_unit(image, UNIT_SERIAL, vector.counters, vector.thermometers)
+}
+
+/// Writes the boot report into [`REPORT`] and logs it. Not inlined: its temporaries are not on
+/// the stack while the models are decoded.
+#[inline(never)]
+fn write_report(
+    report: &mut BootReport,
+    image: &'static [u8],
+    config: &'static [ChannelConfig],
+    loaded: &[Result<(), LoadError>; MAX_CHANNELS],
     watchdog: bool,
     next: u32,
-) -> BootReport {
-    let loaded = app.load_for_unit(image, UNIT_SERIAL, vector.counters, vector.thermometers);
-    let mut report = tcomp_firmware::boot::report(image, UNIT_SERIAL, config, &loaded, watchdog);
+) {
+    *report = tcomp_firmware::boot::report(image, UNIT_SERIAL, config, loaded, watchdog);
     report.sequence = next;
     defmt::info!(
         "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
@@ -224,7 +238,14 @@ fn load_models(
             );
         }
     }
-    report
+}
+
+/// The boot report's static, for `main` to fill and hand to the loop.
+fn boot_report() -> &'static mut BootReport {
+    let report: *mut BootReport = &raw mut REPORT;
+    // SAFETY: `main` calls this once per boot, before the sample interrupt (REPORT's only other
+    // user, through the reference returned here) is enabled.
+    unsafe { &mut *report }
 }
 
 /// Encodes and sends a boot report. Not inlined, so its buffer is not part of the sample
@@ -401,23 +422,23 @@ fn main() -> ! {
     let (run, app): (*mut MaybeUninit<Run>, *mut App<'static>) = (&raw mut RUN, &raw mut APP);
     // SAFETY: as above.
     let (run, app) = unsafe { (&mut *run, &mut *app) };
-    // SAFETY: every bit pattern of the `repr(C)` integer struct is valid.
-    let previous = unsafe { run.assume_init_read() };
+    // SAFETY: every bit pattern of the `repr(C)` integer struct is valid. Read field by field, not
+    // copied whole: `main`'s frame lies under the model decoder's at the boot's stack peak.
+    let (magic, update_reset, next) = unsafe {
+        let p = run.as_ptr();
+        ((*p).magic, (*p).update_reset, (*p).next)
+    };
+    let after_update = magic == RUN_MAGIC && update_reset == UPDATE_RESET;
     let mut boot_flags = 0;
     let run = match fault.and_then(|f| f.valid()) {
-        _ if previous.magic == RUN_MAGIC && previous.update_reset == UPDATE_RESET => {
-            run.write(Run::NEW)
-        }
-        Some(FaultKind::Watchdog) if previous.magic == RUN_MAGIC => {
-            defmt::println!(
-                "reset cause: watchdog; resuming at sample {=u32}",
-                previous.next
-            );
+        _ if after_update => run.write(Run::NEW),
+        Some(FaultKind::Watchdog) if magic == RUN_MAGIC => {
+            defmt::println!("reset cause: watchdog; resuming at sample {=u32}", next);
             boot_flags = status::WATCHDOG_RESET;
-            run.write(Run {
-                watchdog_resets: previous.watchdog_resets + 1,
-                ..previous
-            })
+            // SAFETY: as above; the previous run's record is resumed in place.
+            let resumed = unsafe { run.assume_init_mut() };
+            resumed.watchdog_resets += 1;
+            resumed
         }
         Some(kind) => {
             defmt::error!("the previous run ended in {}", kind);
@@ -430,10 +451,13 @@ fn main() -> ! {
     // loop's models borrow only the active one (`choice.image`).
     let mut flash = unsafe { RamFlash::new(models.as_ptr(), models.len()) };
     let choice = choose(&mut flash, &QEMU_LAYOUT, models);
-    let image = choice.image;
-    if previous.magic == RUN_MAGIC && previous.update_reset == UPDATE_RESET {
-        update_boot(app, image, choice.source);
+    let (image, source) = (choice.image, choice.source);
+    if after_update {
+        update_boot(app, image, source);
     }
+    // Into its static now, so the slot choice is not kept in `main`'s frame under the model
+    // decoder's (the boot's stack peak).
+    install_update(flash, choice.active);
     let bytes = region(&raw const __replay_start, &raw const __replay_end);
     let vector = match Vector::parse(bytes) {
         Ok(v) => v,
@@ -459,9 +483,12 @@ fn main() -> ! {
         vector.counters
     );
     app.reset(config);
-    let report = load_models(app, image, config, &vector, boot_flags != 0, run.next);
+    // Two calls, not one function: only `load`'s small frame lies under the decoder's.
+    let loaded = load(app, image, &vector);
+    let report = boot_report();
+    write_report(report, image, config, &loaded, boot_flags != 0, run.next);
 
-    let port = start_update(cp.NVIC, flash, choice.active);
+    let port = start_update(cp.NVIC);
     start_loop(app, run, vector, config, cp.SYST, boot_flags, report);
     // A byte already waiting raises the interrupt at once.
     port.enable_rx_interrupt();
@@ -481,11 +508,10 @@ fn main() -> ! {
     finish(paint_bottom, paint_top, committed)
 }
 
-/// The update task: UART 0's receive interrupt, below the sample timer's priority, so the loop
-/// preempts it (an erase, a chunk, the read-back CRC) at every timer edge. Not inlined, like
-/// `start_loop`.
+/// The update task's state, in its static before the UART interrupt is unmasked. Not inlined,
+/// like `start_loop`.
 #[inline(never)]
-fn start_update(mut nvic: NVIC, flash: RamFlash, active: Option<Active>) -> Uart {
+fn install_update(flash: RamFlash, active: Option<Active>) {
     let update: *mut Option<Updater> = &raw mut UPDATE;
     // SAFETY: the UART interrupt, UPDATE's only other user, is not unmasked yet.
     unsafe {
@@ -494,6 +520,12 @@ fn start_update(mut nvic: NVIC, flash: RamFlash, active: Option<Active>) -> Uart
             flash,
         });
     }
+}
+
+/// The update task runs in UART 0's receive interrupt, below the sample timer's priority, so the
+/// loop preempts it (an erase, a chunk, the read-back CRC) at every timer edge.
+#[inline(never)]
+fn start_update(mut nvic: NVIC) -> Uart {
     // SAFETY: priorities change before either interrupt is unmasked; a lower number preempts.
     unsafe {
         nvic.set_priority(Irq(TIMER0_IRQ as u16), 0x00);
@@ -512,7 +544,7 @@ fn start_loop(
     config: &'static [ChannelConfig],
     syst: cortex_m::peripheral::SYST,
     boot_flags: u16,
-    report: BootReport,
+    report: &'static mut BootReport,
 ) {
     let timer = Timer::timer0();
     let time = TimeBase::start();
@@ -538,7 +570,7 @@ fn start_loop(
         boot_flags,
         report,
     };
-    send_report(&state.uart, &state.report);
+    send_report(&state.uart, state.report);
     cortex_m::interrupt::free(|cs| *LOOP.borrow(cs).borrow_mut() = Some(state));
     // SAFETY: the handler (DefaultHandler, IRQ 8) only takes LOOP inside a critical section.
     unsafe { NVIC::unmask(Irq(TIMER0_IRQ as u16)) };

@@ -93,6 +93,20 @@ pub struct BootReport {
 }
 
 impl BootReport {
+    /// A report with every field zero and no channel lines (the `Default`, usable in a `static`).
+    pub const EMPTY: Self = Self {
+        sequence: 0,
+        unit_serial: 0,
+        image_serial: 0,
+        board_hash: 0,
+        image_crc: 0,
+        image_version: 0,
+        image_state: 0,
+        flags: 0,
+        channels: [ChannelState { id: 0, state: 0 }; MAX_CHANNELS],
+        count: 0,
+    };
+
     /// Sets the channel lines (the first [`MAX_CHANNELS`] of `channels`).
     pub fn set_channels(&mut self, channels: &[ChannelState]) {
         self.count = 0;
