@@ -103,72 +103,14 @@ pub const RLG_ARCSEC_PER_PULSE: f32 = 1.0e-5;
 /// µg per Hz of the replayed QMA current-to-frequency converters.
 pub const QMA_UG_PER_HZ: f32 = 0.01;
 
-const fn rlg(
-    id: u16,
-    name: &'static str,
-    t: &'static [(&'static str, u8)],
-    c: u8,
-) -> ChannelConfig {
-    ChannelConfig {
-        id,
-        name,
-        thermometers: t,
-        counter: c,
-        scale: ChannelScale::rlg_arcsec_per_pulse(RLG_ARCSEC_PER_PULSE),
-    }
-}
+/// The strapdown IMU of `firmware/descriptions/imu6-rlg-qma.toml` (generated, see
+/// [`crate::wiring`]): three RLGs (anode, cathode, shell thermometers each) and three QMAs (one
+/// each). Thermometers 0–8 are the RLGs', 9–11 the QMAs'; counters 0–2 the RLGs', 3–5 the QMAs'.
+pub const IMU6: [ChannelConfig; 6] = crate::wiring::IMU6_RLG_QMA;
 
-const fn qma(
-    id: u16,
-    name: &'static str,
-    t: &'static [(&'static str, u8)],
-    c: u8,
-) -> ChannelConfig {
-    ChannelConfig {
-        id,
-        name,
-        thermometers: t,
-        counter: c,
-        scale: ChannelScale::qma_ug_per_hz(QMA_UG_PER_HZ),
-    }
-}
-
-/// The strapdown IMU: three RLGs (anode, cathode, shell thermometers each) and three QMAs (one each).
-/// Thermometers 0–8 are the RLGs', 9–11 the QMAs'; counters 0–2 the RLGs', 3–5 the QMAs'.
-pub const IMU6: [ChannelConfig; 6] = [
-    rlg(
-        0,
-        "rlg-x",
-        &[("t_anode_c", 0), ("t_cathode_c", 1), ("t_shell_c", 2)],
-        0,
-    ),
-    rlg(
-        1,
-        "rlg-y",
-        &[("t_anode_c", 3), ("t_cathode_c", 4), ("t_shell_c", 5)],
-        1,
-    ),
-    rlg(
-        2,
-        "rlg-z",
-        &[("t_anode_c", 6), ("t_cathode_c", 7), ("t_shell_c", 8)],
-        2,
-    ),
-    qma(3, "qma-x", &[("t_qma_c", 9)], 3),
-    qma(4, "qma-y", &[("t_qma_c", 10)], 4),
-    qma(5, "qma-z", &[("t_qma_c", 11)], 5),
-];
-
-/// A single fiber-optic gyro with its coil thermometer: the board description
-/// `firmware/descriptions/ifog1.toml` (channel 0, `ifog-x`, as the triad's first channel), whose
-/// image the QEMU run loads.
-pub const IFOG1: [ChannelConfig; 1] = [ChannelConfig {
-    id: 0,
-    name: "ifog-x",
-    thermometers: &[("t_coil_c", 0)],
-    counter: 0,
-    scale: ChannelScale::rlg_arcsec_per_pulse(RLG_ARCSEC_PER_PULSE),
-}];
+/// A single fiber-optic gyro with its coil thermometer: `firmware/descriptions/ifog1.toml`
+/// (channel 0, `ifog-x`, as the triad's first channel), whose image the QEMU run loads.
+pub const IFOG1: [ChannelConfig; 1] = crate::wiring::IFOG1;
 
 /// Why a channel has no model.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

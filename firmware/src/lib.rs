@@ -1,5 +1,6 @@
 //! The firmware: the compensation loop ([`app`]), the fault record kept across resets ([`fault`]),
-//! the time-base check ([`timing`]), the boot report ([`boot`]),
+//! the time-base check ([`timing`]), the boot report ([`boot`]), the channel tables generated from
+//! the board descriptions ([`wiring`]),
 //! the model-blob image in flash ([`image`]) and its two slots ([`slots`]), the update task that
 //! rewrites them over the serial link ([`update`]), the replay board of the QEMU run ([`replay`]), and
 //! board support for the binaries (semihosting exit codes, the SysTick instruction counter).
@@ -22,6 +23,7 @@ pub mod replay;
 pub mod slots;
 pub mod timing;
 pub mod update;
+pub mod wiring;
 
 #[cfg(target_os = "none")]
 mod board;

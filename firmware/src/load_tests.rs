@@ -185,29 +185,7 @@ fn a_table_the_board_cannot_run_loads_nothing() {
 }
 
 /// The IFOG triad of `firmware/descriptions/ifog3.toml`: three coils, three counters.
-static IFOG3: [ChannelConfig; 3] = [
-    ChannelConfig {
-        id: 0,
-        name: "ifog-x",
-        thermometers: &[("t_coil_c", 0)],
-        counter: 0,
-        scale: ChannelScale::rlg_arcsec_per_pulse(RLG_ARCSEC_PER_PULSE),
-    },
-    ChannelConfig {
-        id: 1,
-        name: "ifog-y",
-        thermometers: &[("t_coil_c", 1)],
-        counter: 1,
-        scale: ChannelScale::rlg_arcsec_per_pulse(RLG_ARCSEC_PER_PULSE),
-    },
-    ChannelConfig {
-        id: 2,
-        name: "ifog-z",
-        thermometers: &[("t_coil_c", 2)],
-        counter: 2,
-        scale: ChannelScale::rlg_arcsec_per_pulse(RLG_ARCSEC_PER_PULSE),
-    },
-];
+static IFOG3: [ChannelConfig; 3] = crate::wiring::IFOG3;
 
 #[test]
 fn an_ifog_triad_runs_its_own_models_through_the_same_loop() {
@@ -319,26 +297,7 @@ impl PulseCounter for Steady {
 }
 
 /// The MEMS IMU of `firmware/descriptions/mems6.toml`: one die thermometer, six sample sources.
-static MEMS6: [ChannelConfig; 6] = {
-    const fn ch(id: u16, name: &'static str, per_lsb: f32) -> ChannelConfig {
-        ChannelConfig {
-            id,
-            name,
-            thermometers: &[("temp_imu_C", 0)],
-            counter: id as u8,
-            // `per_pulse` is the sample source's unit per LSB.
-            scale: ChannelScale::rlg_arcsec_per_pulse(per_lsb),
-        }
-    }
-    [
-        ch(0, "gyro-x", 1.527_163_1e-4),
-        ch(1, "gyro-y", 1.527_163_1e-4),
-        ch(2, "gyro-z", 1.527_163_1e-4),
-        ch(3, "acc-x", 5.9855e-4),
-        ch(4, "acc-y", 5.9855e-4),
-        ch(5, "acc-z", 5.9855e-4),
-    ]
-};
+static MEMS6: [ChannelConfig; 6] = crate::wiring::MEMS6;
 
 /// `tcomp image --board firmware/descriptions/mems6.toml --serial 0x5EED --created 1763900000`
 /// of six models `tcomp fit` made from `data/realdata/mems_thermal_cycle.csv` (train before

@@ -10,7 +10,6 @@
 //! by its reader (`tcomp … | head`) ends the run quietly with 0; any other failure to write it is an
 //! error.
 
-mod board;
 mod cmd;
 mod demo;
 mod render;

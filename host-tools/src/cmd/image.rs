@@ -14,7 +14,7 @@ use clap::Args as ClapArgs;
 use std::path::{Path, PathBuf};
 use tcomp_core::image::{Entry, Fnv64, ImageSpec, MAX_ENTRIES, Mismatch, Provenance};
 
-use crate::board::Board;
+use tcomp_board_description::Board;
 
 /// Size of the firmware's `MODELS` region.
 const REGION_BYTES: usize = 64 * 1024;

@@ -1,6 +1,10 @@
 //! The board description: a small TOML file the user writes once per IMU design, read here and
 //! compiled into the rows the calibration image carries ([`tcomp_core::image::table`]).
 //!
+//! One reader for both sides: `tcomp image --board` checks models against it, and the firmware's
+//! `build.rs` generates the loop's channel tables from the same files, so the wiring is written once
+//! (in TOML) and the image is checked against exactly what the firmware runs.
+//!
 //! It says, per channel, what the firmware needs to run a model there — id, name, sensor kind,
 //! axis, output unit, the pulse counter or sample source and its scale, and which thermometer
 //! feeds each input column a model may read — and, per thermometer, where it is read (converter,
@@ -282,7 +286,14 @@ fn therm_kind(t: &RawTherm) -> Result<ThermKind, String> {
 }
 
 fn channel(c: &RawChannel, therms: &[(String, u8, u8, ThermKind)]) -> Result<Channel, String> {
-    let sensor = tcomp_train::train::parse_sensor(&c.sensor).map_err(|e| e.to_string())?;
+    let sensor = SensorKind::from_name(&c.sensor).ok_or_else(|| {
+        let known: Vec<&str> = SensorKind::ALL.iter().map(|k| k.name()).collect();
+        format!(
+            "unknown sensor `{}` (known: {})",
+            c.sensor,
+            known.join(", ")
+        )
+    })?;
     let source = match (c.counter, c.sample) {
         (Some(n), None) => Source::Counter(n),
         (None, Some(n)) => Source::Sample(n),
