@@ -21,6 +21,8 @@
 mod fault;
 mod setup;
 
+include!(concat!(env!("OUT_DIR"), "/board_config.rs"));
+
 use defmt_rtt as _;
 
 unsafe extern "C" {
@@ -77,6 +79,7 @@ const TX_QUEUE: usize = 512;
 
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
+    use crate::CONFIG;
     use embedded_hal_bus::util::AtomicCell;
     use heapless::spsc::{Consumer, Producer, Queue};
     use stm32f4xx_hal::pac::Interrupt;
@@ -84,7 +87,7 @@ mod app {
     use stm32f4xx_hal::serial::{TxISR, TxListen};
     use stm32f4xx_hal::timer::Flag;
     use tcomp_core::frame::{BootReport, MAX_FRAME_LEN};
-    use tcomp_firmware::app::{App, IMU6, MAX_CHANNELS, Record, status};
+    use tcomp_firmware::app::{App, MAX_CHANNELS, Record, status};
     use tcomp_firmware::boot::REPORT_PERIODS;
 
     use crate::setup::{
@@ -112,7 +115,7 @@ mod app {
     #[init(local = [
         // The loop's state (about 11 KB) lives in this static from the start (`App::new` is const):
         // never built on the stack and moved.
-        app_state: App<'static> = App::new(&IMU6),
+        app_state: App<'static> = App::new(CONFIG),
         queue: Queue<u8, { crate::TX_QUEUE }> = Queue::new(),
         spi1: Option<AtomicCell<Spi1Bus>> = None,
     ])]
@@ -151,7 +154,7 @@ mod app {
             crate::fault::ResetCause::WindowWatchdog
                 | crate::fault::ResetCause::IndependentWatchdog
         );
-        let report = tcomp_firmware::boot::report(image, unit, &IMU6, &loaded, watchdog);
+        let report = tcomp_firmware::boot::report(image, unit, CONFIG, &loaded, watchdog);
         defmt::info!(
             "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
             report.unit_serial,
@@ -161,7 +164,7 @@ mod app {
             report.board_hash,
             report.image_crc
         );
-        for (cfg, r) in IMU6.iter().zip(loaded.iter()) {
+        for (cfg, r) in CONFIG.iter().zip(loaded.iter()) {
             match r {
                 Ok(()) => defmt::info!("channel {=str}: model loaded", cfg.name),
                 Err(e) => defmt::warn!(
