@@ -1,1 +1,4 @@
-//! Workspace-level end-to-end tests live in `tests/tests/`; this library is empty.
+//! Workspace-level end-to-end tests live in `tests/tests/`; this library holds the host side of
+//! the QEMU replay ([`replay`]), which `cargo xtask qemu` runs.
+
+pub mod replay;

@@ -15,10 +15,10 @@ mod board;
 mod elf;
 mod qemu;
 mod update;
-mod vector;
 
 use anyhow::{Context, Result, bail};
 use std::process::{Command, Stdio};
+use tcomp_tests::replay::field;
 
 const TARGET: &str = "thumbv7em-none-eabihf";
 /// Budget for one RBF evaluation (32 centers × 4 features) under QEMU, in instructions.
@@ -159,13 +159,4 @@ fn power_cut() -> Result<()> {
         bail!("power-loss test failed ({})", out.status);
     }
     Ok(())
-}
-
-/// The number after `key` in `text`.
-fn field(text: &str, key: &str) -> Option<u64> {
-    let rest = &text[text.find(key)? + key.len()..];
-    rest.split(|c: char| !c.is_ascii_digit())
-        .next()?
-        .parse()
-        .ok()
 }

@@ -102,7 +102,8 @@ pub fn run(
     if !qemu_status.success() {
         bail!("the QEMU update run failed ({qemu_status})");
     }
-    crate::qemu::check(&text, hash, samples).context("the boot that received the update")?;
+    tcomp_tests::replay::checks::check(&text, hash, samples)
+        .context("the boot that received the update")?;
     let get =
         |k: &str| field(&report, k).with_context(|| format!("no {k} in tcomp flash's report"));
     let (n, lost, first, last) = (

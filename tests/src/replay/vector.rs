@@ -36,6 +36,7 @@ pub struct Csv {
 }
 
 impl Csv {
+    /// Reads a CSV file whole (the simulator's 200 Hz slices are small).
     pub fn read(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
         let mut lines = text.lines();
@@ -55,6 +56,7 @@ impl Csv {
         Ok(Self { header, rows })
     }
 
+    /// `n` values of column `name` from row `from`.
     pub fn column(&self, name: &str, from: usize, n: usize) -> Result<Vec<f64>> {
         let i = self
             .header
@@ -74,10 +76,15 @@ impl Csv {
 
 /// One sensor stream of the vector and the faults injected into it.
 pub struct Inputs {
+    /// Per thermometer, its readings (°C, may be NaN).
     pub temps: Vec<Vec<f32>>,
+    /// Per thermometer, the samples whose read is a bus error.
     pub therm_faults: Vec<Vec<bool>>,
+    /// Per counter, its free-running register at each sample.
     pub counters: Vec<Vec<u32>>,
+    /// Per counter, its register before the first sample.
     pub counter_start: Vec<u32>,
+    /// Per counter, the samples whose read is a bus error.
     pub counter_faults: Vec<Vec<bool>>,
     /// Counter intervals the block flags (pulses lost: consumed, not counted).
     pub counter_flagged: Vec<Vec<bool>>,
@@ -88,6 +95,7 @@ pub struct Inputs {
 }
 
 impl Inputs {
+    /// No streams yet, `samples` long, with the nominal latch instants.
     pub fn new(samples: usize) -> Self {
         Self {
             temps: vec![],
@@ -101,10 +109,12 @@ impl Inputs {
         }
     }
 
+    /// Samples per stream.
     pub fn samples(&self) -> usize {
         self.temps.first().map_or(0, Vec::len)
     }
 
+    /// Adds a thermometer stream; returns its index.
     pub fn thermometer(&mut self, celsius: &[f64]) -> usize {
         self.temps.push(celsius.iter().map(|&t| t as f32).collect());
         self.therm_faults.push(vec![false; celsius.len()]);
