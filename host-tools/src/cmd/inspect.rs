@@ -7,6 +7,7 @@
 use clap::Args as ClapArgs;
 use serde_json::json;
 use std::path::PathBuf;
+use tcomp_core::HostModel;
 
 use super::printable::text;
 
@@ -27,6 +28,20 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         return super::inspect_image::run(&args.model, &bytes, args.json);
     }
     let m = tcomp_train::blob_io::decode(&args.model, &bytes)?;
+    if args.json {
+        let value = blob_json(args, &bytes, &m);
+        outln!(
+            "{}",
+            super::printable::json(&serde_json::to_string_pretty(&value)?)
+        );
+        return Ok(());
+    }
+    print_blob(args, &bytes, &m);
+    Ok(())
+}
+
+/// The blob's `--json` document.
+fn blob_json(args: &Args, bytes: &[u8], m: &HostModel<'_>) -> serde_json::Value {
     let nf = m.n_features();
     let centers: Vec<_> = m
         .rbf
@@ -66,7 +81,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .map(|s| format!("{} = {}", s.name, s.expr))
         .collect();
     let c = &m.meta.columns;
-    let value = json!({
+    json!({
         "file": args.model.display().to_string(),
         "bytes": bytes.len(),
         "version": m.version,
@@ -89,14 +104,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         "residual": {
             "std": m.residual.std, "binned_std": m.residual.binned_std, "bin_s": m.residual.bin_s,
         },
-    });
-    if args.json {
-        outln!(
-            "{}",
-            super::printable::json(&serde_json::to_string_pretty(&value)?)
-        );
-        return Ok(());
-    }
+    })
+}
+
+/// The blob as text: metadata, program, features with their ranges, centers, residual level.
+fn print_blob(args: &Args, bytes: &[u8], m: &HostModel<'_>) {
+    let nf = m.n_features();
+    let c = &m.meta.columns;
+    let signals: Vec<String> = m
+        .program
+        .signals
+        .iter()
+        .map(|s| format!("{} = {}", s.name, s.expr))
+        .collect();
     outln!(
         "{}: valid tcomp model blob, format version {}, {} bytes",
         args.model.display(),
@@ -162,5 +182,4 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         m.residual.binned_std,
         m.residual.bin_s
     );
-    Ok(())
 }
