@@ -55,19 +55,7 @@ pub struct Args {
 /// Runs the subcommand.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     if args.list {
-        if args.json {
-            let list: Vec<_> = presets::list()
-                .iter()
-                .map(|p| serde_json::json!({"name": p.name, "description": p.description}))
-                .collect();
-            outln!("{}", serde_json::to_string_pretty(&list)?);
-        } else {
-            outln!("Presets (tcomp simulate --preset NAME --out DIR):");
-            for p in presets::list() {
-                outln!("  {:<12} {}", p.name, p.description);
-            }
-        }
-        return Ok(());
+        return list(args.json);
     }
     let Some(out) = &args.out else {
         bail!("--out DIR is required");
@@ -97,29 +85,72 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let truth = tcomp_sim::write_preset_with_progress(&preset, out, args.gzip, &mut progress)?;
     progress.clear();
     if args.json {
-        let run = |t: &tcomp_sim::Truth, file: Option<&String>| {
-            serde_json::json!({
-                "file": file.map(|f| out.join(f)),
-                "rows": t.rows,
-                "bias_std": t.bias_std,
-                "noise_std_raw": t.noise.std_raw,
-                "noise_std_100s": t.noise.std_100s,
-                "noise_std_1000s": t.noise.std_1000s,
-            })
-        };
-        let summary = serde_json::json!({
-            "name": truth.name,
-            "sensor": truth.sensor,
-            "unit": truth.train.unit,
-            "truth": out.join("truth.json"),
-            "train": run(&truth.train, truth.files.get("train")),
-            "verify": run(&truth.verify, truth.files.get("verify")),
-            "effects": truth.effects.iter().map(|e| e.name.clone()).collect::<Vec<_>>(),
-            "true_features": truth.true_features,
-        });
-        outln!("{}", serde_json::to_string_pretty(&summary)?);
-        return Ok(());
+        return print_json(&truth, out);
     }
+    print_text(&truth, out);
+    Ok(())
+}
+
+/// A scenario error about the rate or the step, named by the flag that set it.
+fn as_flags(e: tcomp_sim::Error, args: &Args) -> anyhow::Error {
+    match &e {
+        tcomp_sim::Error::Invalid { field, message } => {
+            let flag = match field.as_str() {
+                "rate_hz" if args.rate_hz.is_some() => "--rate-hz",
+                "step_s" if args.step_s.is_some() => "--step-s",
+                _ => return e.into(),
+            };
+            anyhow::anyhow!("{flag}: {message}")
+        }
+        _ => e.into(),
+    }
+}
+
+/// `--list`: the presets, as text or JSON.
+fn list(json: bool) -> anyhow::Result<()> {
+    if json {
+        let list: Vec<_> = presets::list()
+            .iter()
+            .map(|p| serde_json::json!({"name": p.name, "description": p.description}))
+            .collect();
+        outln!("{}", serde_json::to_string_pretty(&list)?);
+    } else {
+        outln!("Presets (tcomp simulate --preset NAME --out DIR):");
+        for p in presets::list() {
+            outln!("  {:<12} {}", p.name, p.description);
+        }
+    }
+    Ok(())
+}
+
+/// What was written, as JSON.
+fn print_json(truth: &tcomp_sim::TruthFile, out: &std::path::Path) -> anyhow::Result<()> {
+    let run = |t: &tcomp_sim::Truth, file: Option<&String>| {
+        serde_json::json!({
+            "file": file.map(|f| out.join(f)),
+            "rows": t.rows,
+            "bias_std": t.bias_std,
+            "noise_std_raw": t.noise.std_raw,
+            "noise_std_100s": t.noise.std_100s,
+            "noise_std_1000s": t.noise.std_1000s,
+        })
+    };
+    let summary = serde_json::json!({
+        "name": truth.name,
+        "sensor": truth.sensor,
+        "unit": truth.train.unit,
+        "truth": out.join("truth.json"),
+        "train": run(&truth.train, truth.files.get("train")),
+        "verify": run(&truth.verify, truth.files.get("verify")),
+        "effects": truth.effects.iter().map(|e| e.name.clone()).collect::<Vec<_>>(),
+        "true_features": truth.true_features,
+    });
+    outln!("{}", serde_json::to_string_pretty(&summary)?);
+    Ok(())
+}
+
+/// What was written, as text.
+fn print_text(truth: &tcomp_sim::TruthFile, out: &std::path::Path) {
     let t = &truth.train;
     outln!(
         "{} ({}): {} Hz internal, {} s rows, seeds {} / {}",
@@ -165,20 +196,4 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         t.columns.target,
         t.columns.reference
     );
-    Ok(())
-}
-
-/// A scenario error about the rate or the step, named by the flag that set it.
-fn as_flags(e: tcomp_sim::Error, args: &Args) -> anyhow::Error {
-    match &e {
-        tcomp_sim::Error::Invalid { field, message } => {
-            let flag = match field.as_str() {
-                "rate_hz" if args.rate_hz.is_some() => "--rate-hz",
-                "step_s" if args.step_s.is_some() => "--step-s",
-                _ => return e.into(),
-            };
-            anyhow::anyhow!("{flag}: {message}")
-        }
-        _ => e.into(),
-    }
 }
