@@ -271,31 +271,7 @@ impl Dataset {
             });
         }
         if let Some(sep) = other_separator(&names) {
-            // One record more tells whether numbers are written with a decimal comma: in a
-            // `;`-separated row `20,5;0,01` the comma splits each number into two fields.
-            let mut rec = csv::StringRecord::new();
-            let first_row = match rdr.read_record(&mut rec) {
-                Ok(true) => rec.iter().collect::<Vec<_>>().join(","),
-                _ => String::new(),
-            };
-            let sep_char = if sep.starts_with("tabs") { '\t' } else { ';' };
-            let decimal_comma = first_row.split(sep_char).any(|f| {
-                let f = f.trim();
-                f.split_once(',').is_some_and(|(a, b)| {
-                    !a.is_empty()
-                        && !b.is_empty()
-                        && a.trim_start_matches('-')
-                            .bytes()
-                            .all(|c| c.is_ascii_digit())
-                        && b.bytes().all(|c| c.is_ascii_digit())
-                })
-            });
-            return Err(DataError::Separator {
-                file: file.to_string(),
-                header: clip(names.first().map_or("", String::as_str)),
-                sep,
-                decimal_comma,
-            });
+            return Err(separator_error(file, &names, sep, &mut rdr));
         }
         check_duplicates(file, &names)?;
         let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
@@ -721,4 +697,39 @@ pub fn median_step(time: &[f64]) -> f64 {
     let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
     let mid = steps.len() / 2;
     *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// The error for a header split by another separator than `,` (`sep` names it), with a hint
+/// when the first row shows a decimal comma.
+fn separator_error<R: Read>(
+    file: &str,
+    names: &[String],
+    sep: &'static str,
+    rdr: &mut csv::Reader<R>,
+) -> DataError {
+    // One record more tells whether numbers are written with a decimal comma: in a
+    // `;`-separated row `20,5;0,01` the comma splits each number into two fields.
+    let mut rec = csv::StringRecord::new();
+    let first_row = match rdr.read_record(&mut rec) {
+        Ok(true) => rec.iter().collect::<Vec<_>>().join(","),
+        _ => String::new(),
+    };
+    let sep_char = if sep.starts_with("tabs") { '\t' } else { ';' };
+    let decimal_comma = first_row.split(sep_char).any(|f| {
+        let f = f.trim();
+        f.split_once(',').is_some_and(|(a, b)| {
+            !a.is_empty()
+                && !b.is_empty()
+                && a.trim_start_matches('-')
+                    .bytes()
+                    .all(|c| c.is_ascii_digit())
+                && b.bytes().all(|c| c.is_ascii_digit())
+        })
+    });
+    DataError::Separator {
+        file: file.to_string(),
+        header: clip(names.first().map_or("", String::as_str)),
+        sep,
+        decimal_comma,
+    }
 }
