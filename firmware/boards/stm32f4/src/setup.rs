@@ -130,57 +130,7 @@ pub fn setup(
         &mut rcc,
     );
     let bus: &'static AtomicCell<Spi1Bus> = spi1.insert(AtomicCell::new(bus));
-    // Per thermometer: its chip select and its converter's DRDY line.
-    let pins: [(AnyPin<Output>, AnyPin<Input>); THERMOMETERS] = [
-        (
-            gpioe.pe0.into_push_pull_output().erase(),
-            gpiod.pd0.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe1.into_push_pull_output().erase(),
-            gpiod.pd1.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe2.into_push_pull_output().erase(),
-            gpiod.pd2.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe3.into_push_pull_output().erase(),
-            gpiod.pd3.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe4.into_push_pull_output().erase(),
-            gpiod.pd4.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe5.into_push_pull_output().erase(),
-            gpiod.pd5.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe6.into_push_pull_output().erase(),
-            gpiod.pd6.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe7.into_push_pull_output().erase(),
-            gpiod.pd7.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe8.into_push_pull_output().erase(),
-            gpiod.pd8.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe9.into_push_pull_output().erase(),
-            gpiod.pd9.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe10.into_push_pull_output().erase(),
-            gpiod.pd10.into_pull_up_input().erase(),
-        ),
-        (
-            gpioe.pe11.into_push_pull_output().erase(),
-            gpiod.pd11.into_pull_up_input().erase(),
-        ),
-    ];
+    let pins = thermometer_pins(gpiod, gpioe);
     let mut thermometers = pins.map(|(mut pin, drdy)| {
         pin.set_high();
         // `new_no_delay` only drives CS high, which cannot fail on this pin (`Infallible`).
@@ -250,4 +200,61 @@ pub fn setup(
         reset_cause,
         fault,
     })
+}
+
+/// Per thermometer: its chip select (PE0–PE11) and its converter's DRDY line (PD0–PD11).
+fn thermometer_pins(
+    gpiod: stm32f4xx_hal::gpio::gpiod::Parts,
+    gpioe: stm32f4xx_hal::gpio::gpioe::Parts,
+) -> [(AnyPin<Output>, AnyPin<Input>); THERMOMETERS] {
+    [
+        (
+            gpioe.pe0.into_push_pull_output().erase(),
+            gpiod.pd0.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe1.into_push_pull_output().erase(),
+            gpiod.pd1.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe2.into_push_pull_output().erase(),
+            gpiod.pd2.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe3.into_push_pull_output().erase(),
+            gpiod.pd3.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe4.into_push_pull_output().erase(),
+            gpiod.pd4.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe5.into_push_pull_output().erase(),
+            gpiod.pd5.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe6.into_push_pull_output().erase(),
+            gpiod.pd6.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe7.into_push_pull_output().erase(),
+            gpiod.pd7.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe8.into_push_pull_output().erase(),
+            gpiod.pd8.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe9.into_push_pull_output().erase(),
+            gpiod.pd9.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe10.into_push_pull_output().erase(),
+            gpiod.pd10.into_pull_up_input().erase(),
+        ),
+        (
+            gpioe.pe11.into_push_pull_output().erase(),
+            gpiod.pd11.into_pull_up_input().erase(),
+        ),
+    ]
 }
