@@ -26,55 +26,7 @@ pub fn run(
     hash: u32,
     samples: usize,
 ) -> Result<()> {
-    let mut qemu = Command::new("qemu-system-arm")
-        .args([
-            "-cpu",
-            "cortex-m4",
-            "-machine",
-            "mps2-an386",
-            "-nographic",
-            "-monitor",
-            "none",
-            "-semihosting-config",
-            "enable=on,target=native",
-            "-icount",
-            "shift=3,sleep=off",
-            "-serial",
-            "pty",
-        ])
-        .arg("-kernel")
-        .arg(elf)
-        .arg("-device")
-        .arg(format!(
-            "loader,file={},addr=0x3F0000,force-raw=on",
-            initial.display()
-        ))
-        .arg("-device")
-        .arg(format!(
-            "loader,file={},addr=0x21000000,force-raw=on",
-            vector.display()
-        ))
-        .stdout(Stdio::piped())
-        .spawn()
-        .context("starting qemu-system-arm")?;
-    // QEMU names the pty on its standard output, before the guest's semihosting (defmt) bytes,
-    // which then go on to defmt-print.
-    let mut stdout = BufReader::new(qemu.stdout.take().context("qemu stdout")?);
-    let mut line = String::new();
-    let pty = loop {
-        line.clear();
-        if stdout.read_line(&mut line)? == 0 {
-            bail!("QEMU named no pty for its serial port");
-        }
-        if let Some(rest) = line.split("char device redirected to ").nth(1) {
-            eprint!("{line}");
-            break rest
-                .split_whitespace()
-                .next()
-                .context("pty path")?
-                .to_string();
-        }
-    };
+    let (mut qemu, mut stdout, pty) = start_qemu(elf, initial, vector)?;
     let mut decoder = Command::new("defmt-print")
         .arg("-e")
         .arg(elf)
@@ -129,4 +81,67 @@ pub fn run(
         "update over the UART: committed to slot B, {n} output frames during it (sequences {first}..={last}, none lost); after the reset: slot B, generation 1, 6 of 6 models"
     );
     Ok(())
+}
+
+/// Starts the replay firmware under QEMU with its UART on a pty; returns QEMU, its standard output
+/// (read past the line that names the pty) and the pty's path.
+fn start_qemu(
+    elf: &Path,
+    initial: &Path,
+    vector: &Path,
+) -> Result<(
+    std::process::Child,
+    BufReader<std::process::ChildStdout>,
+    String,
+)> {
+    let mut qemu = Command::new("qemu-system-arm")
+        .args([
+            "-cpu",
+            "cortex-m4",
+            "-machine",
+            "mps2-an386",
+            "-nographic",
+            "-monitor",
+            "none",
+            "-semihosting-config",
+            "enable=on,target=native",
+            "-icount",
+            "shift=3,sleep=off",
+            "-serial",
+            "pty",
+        ])
+        .arg("-kernel")
+        .arg(elf)
+        .arg("-device")
+        .arg(format!(
+            "loader,file={},addr=0x3F0000,force-raw=on",
+            initial.display()
+        ))
+        .arg("-device")
+        .arg(format!(
+            "loader,file={},addr=0x21000000,force-raw=on",
+            vector.display()
+        ))
+        .stdout(Stdio::piped())
+        .spawn()
+        .context("starting qemu-system-arm")?;
+    // QEMU names the pty on its standard output, before the guest's semihosting (defmt) bytes,
+    // which then go on to defmt-print.
+    let mut stdout = BufReader::new(qemu.stdout.take().context("qemu stdout")?);
+    let mut line = String::new();
+    let pty = loop {
+        line.clear();
+        if stdout.read_line(&mut line)? == 0 {
+            bail!("QEMU named no pty for its serial port");
+        }
+        if let Some(rest) = line.split("char device redirected to ").nth(1) {
+            eprint!("{line}");
+            break rest
+                .split_whitespace()
+                .next()
+                .context("pty path")?
+                .to_string();
+        }
+    };
+    Ok((qemu, stdout, pty))
 }
