@@ -450,6 +450,58 @@ pub fn weights_on(
     a.cholesky().map(|c| c.solve(&rhs))
 }
 
+/// The inverse of the symmetric positive definite `p × p` matrix `s` (row-major) and its log
+/// determinant, by Cholesky `S = LLᵀ` in place (lower triangle) and `S⁻¹ = L⁻ᵀL⁻¹`; `None` when
+/// `s` is not positive definite.
+#[allow(clippy::needless_range_loop)] // index loops over small dense blocks read clearest
+fn spd_inverse(s: Vec<f64>, p: usize) -> Option<(Vec<f64>, f64)> {
+    let mut l = s;
+    let mut logdet_s = 0.0;
+    for j in 0..p {
+        let mut d = l[j * p + j];
+        for k in 0..j {
+            d -= l[j * p + k] * l[j * p + k];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return None;
+        }
+        let dj = d.sqrt();
+        logdet_s += 2.0 * dj.ln();
+        l[j * p + j] = dj;
+        for i in j + 1..p {
+            let mut v = l[i * p + j];
+            for k in 0..j {
+                v -= l[i * p + k] * l[j * p + k];
+            }
+            l[i * p + j] = v / dj;
+        }
+    }
+    // L⁻¹ (lower triangular), then S⁻¹ = L⁻ᵀL⁻¹.
+    let mut li = vec![0.0; p * p];
+    for j in 0..p {
+        li[j * p + j] = 1.0 / l[j * p + j];
+        for i in j + 1..p {
+            let mut v = 0.0;
+            for k in j..i {
+                v -= l[i * p + k] * li[k * p + j];
+            }
+            li[i * p + j] = v / l[i * p + i];
+        }
+    }
+    let mut sinv = vec![0.0; p * p];
+    for a in 0..p {
+        for b in 0..=a {
+            let mut v = 0.0;
+            for k in a..p {
+                v += li[k * p + a] * li[k * p + b];
+            }
+            sinv[a * p + b] = v;
+            sinv[b * p + a] = v;
+        }
+    }
+    Some((sinv, logdet_s))
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
@@ -539,56 +591,4 @@ mod tests {
             assert_eq!(blocked.iterations, direct.iterations);
         }
     }
-}
-
-/// The inverse of the symmetric positive definite `p × p` matrix `s` (row-major) and its log
-/// determinant, by Cholesky `S = LLᵀ` in place (lower triangle) and `S⁻¹ = L⁻ᵀL⁻¹`; `None` when
-/// `s` is not positive definite.
-#[allow(clippy::needless_range_loop)] // index loops over small dense blocks read clearest
-fn spd_inverse(s: Vec<f64>, p: usize) -> Option<(Vec<f64>, f64)> {
-    let mut l = s;
-    let mut logdet_s = 0.0;
-    for j in 0..p {
-        let mut d = l[j * p + j];
-        for k in 0..j {
-            d -= l[j * p + k] * l[j * p + k];
-        }
-        if !(d > 0.0 && d.is_finite()) {
-            return None;
-        }
-        let dj = d.sqrt();
-        logdet_s += 2.0 * dj.ln();
-        l[j * p + j] = dj;
-        for i in j + 1..p {
-            let mut v = l[i * p + j];
-            for k in 0..j {
-                v -= l[i * p + k] * l[j * p + k];
-            }
-            l[i * p + j] = v / dj;
-        }
-    }
-    // L⁻¹ (lower triangular), then S⁻¹ = L⁻ᵀL⁻¹.
-    let mut li = vec![0.0; p * p];
-    for j in 0..p {
-        li[j * p + j] = 1.0 / l[j * p + j];
-        for i in j + 1..p {
-            let mut v = 0.0;
-            for k in j..i {
-                v -= l[i * p + k] * li[k * p + j];
-            }
-            li[i * p + j] = v / l[i * p + i];
-        }
-    }
-    let mut sinv = vec![0.0; p * p];
-    for a in 0..p {
-        for b in 0..=a {
-            let mut v = 0.0;
-            for k in a..p {
-                v += li[k * p + a] * li[k * p + b];
-            }
-            sinv[a * p + b] = v;
-            sinv[b * p + a] = v;
-        }
-    }
-    Some((sinv, logdet_s))
 }
