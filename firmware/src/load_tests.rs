@@ -6,6 +6,7 @@
 extern crate std;
 
 use super::*;
+use crate::image::{ImageError, TableError};
 use std::{vec, vec::Vec};
 use tcomp_core::SensorKind;
 use tcomp_core::image::{ChannelRow, Entry, ImageSpec, Input, MAX_ROW_INPUTS, Source, ThermKind};
