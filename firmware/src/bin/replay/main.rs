@@ -24,6 +24,12 @@
 #![no_std]
 #![no_main]
 
+mod sample_loop;
+mod update_task;
+
+use sample_loop::{Loop, send_report};
+use update_task::{Updater, install_update, on_receive, start_update};
+
 use core::cell::RefCell;
 use core::mem::MaybeUninit;
 use core::sync::atomic::{AtomicBool, Ordering};
@@ -33,20 +39,19 @@ use cortex_m_rt::{ExceptionFrame, entry, exception};
 use defmt_semihosting as _;
 use tcomp_core::frame::BootReport;
 use tcomp_core::frame::MAX_FRAME_LEN;
-use tcomp_core::slots::{Active, SlotId};
+use tcomp_core::slots::SlotId;
 use tcomp_firmware::app::{
     App, ChannelConfig, IFOG1, IMU6, LoadError, MAX_CHANNELS, Record, status,
 };
 use tcomp_firmware::boot::REPORT_PERIODS;
 use tcomp_firmware::fault::{FaultKind, FaultRecord};
-use tcomp_firmware::image::check_unit;
 use tcomp_firmware::replay::{
     Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, UNIT_SERIAL,
     Vector,
 };
-use tcomp_firmware::slots::{QEMU_LAYOUT, Source, choose, validates};
+use tcomp_firmware::slots::{QEMU_LAYOUT, Source, choose};
 use tcomp_firmware::timing::TimeCheck;
-use tcomp_firmware::update::{MAX_REPLY, UpdateTask, serial_text};
+use tcomp_firmware::update::serial_text;
 use tcomp_firmware::{
     HASH_START, InstructionCounter, RamFlash, TIMER0_IRQ, TimeBase, Timer, UART0_RX_IRQ, Uart,
     Watchdog, exit, fold_hash,
@@ -147,12 +152,6 @@ impl Run {
     };
 }
 
-/// What the receive interrupt owns.
-struct Updater {
-    task: UpdateTask,
-    flash: RamFlash,
-}
-
 /// The sample timer's IRQ line, for the NVIC.
 #[derive(Clone, Copy)]
 struct Irq(u16);
@@ -161,39 +160,6 @@ struct Irq(u16);
 unsafe impl InterruptNumber for Irq {
     fn number(self) -> u16 {
         self.0
-    }
-}
-
-/// What the sample interrupt owns.
-struct Loop {
-    app: &'static mut App<'static>,
-    run: &'static mut Run,
-    vector: Vector<'static>,
-    board: Board,
-    config: &'static [ChannelConfig],
-    uart: Uart,
-    timer: Timer,
-    time: TimeBase,
-    watchdog: Watchdog,
-    counter: InstructionCounter,
-    check: TimeCheck,
-    /// Time base at the next timer edge due (wrapping with the 32-bit time base), and the edges
-    /// served so far.
-    next_edge: u32,
-    edges: u32,
-    /// SysTick at the previous interrupt (for `period_ticks`).
-    last_entry: u32,
-    /// The first frame of this boot carries the reset cause.
-    boot_flags: u16,
-    /// What this boot loaded, re-sent every `REPORT_PERIODS` samples.
-    report: &'static mut BootReport,
-}
-
-impl Loop {
-    /// Sends the boot report, stamped with the next data frame's sequence number.
-    fn send_report(&mut self, sequence: u32) {
-        self.report.sequence = sequence;
-        send_report(&self.uart, self.report);
     }
 }
 
@@ -246,115 +212,6 @@ fn boot_report() -> &'static mut BootReport {
     // SAFETY: `main` calls this once per boot, before the sample interrupt (REPORT's only other
     // user, through the reference returned here) is enabled.
     unsafe { &mut *report }
-}
-
-/// Encodes and sends a boot report. Not inlined, so its buffer is not part of the sample
-/// interrupt's frame.
-#[inline(never)]
-fn send_report(uart: &Uart, report: &BootReport) {
-    let mut bytes = [0u8; MAX_FRAME_LEN];
-    if let Some(len) = report.encode(&mut bytes) {
-        uart.write_all(bytes.get(..len).unwrap_or(&[]));
-    }
-}
-
-impl Loop {
-    /// One timer period: one sample of the vector through the loop, its frame out of the UART.
-    fn tick(&mut self) {
-        self.timer.clear();
-        self.watchdog.feed();
-        let entry = self.time.now();
-        // Which timer edge this is: lateness beyond a quarter period is an overrun of the previous
-        // sample, and whole periods that passed unserved were missed (never merged silently).
-        // (Entered before the edge it was due for cannot happen; read as on time, not as 2³² late.)
-        let since = match entry.wrapping_sub(self.next_edge) {
-            s if s > u32::MAX / 2 => 0,
-            s => s,
-        };
-        let missed = since / PERIOD;
-        let late = since % PERIOD > PERIOD / 4 || missed > 0;
-        self.next_edge = self.next_edge.wrapping_add(PERIOD.wrapping_mul(missed + 1));
-        let previous_edges = self.edges;
-        self.edges += 1;
-        // The vector's records of the missed edges are skipped: the counter block latched over them.
-        let n = self.run.next as usize + missed as usize;
-        if n >= self.vector.samples {
-            self.timer.stop();
-            DONE.store(true, Ordering::Release);
-            return;
-        }
-        let injected = self.vector.board_faults(n);
-        self.vector.load(n, &mut self.board);
-        let mut out = [Record::default(); MAX_CHANNELS];
-        let k = self.config.len().min(MAX_CHANNELS);
-        let out = out.get_mut(..k).unwrap_or(&mut []);
-        if missed > 0 {
-            self.app
-                .skip_periods(u16::try_from(missed).unwrap_or(u16::MAX));
-        }
-        let (thermometers, mut counters) = self.board.snapshot();
-        let i0 = self.counter.now();
-        self.app.sample_snapshot(thermometers, &mut counters, out);
-        let i1 = self.counter.now();
-        let instr = self.counter.ticks_between(i0, i1) * INSTRUCTIONS_PER_TICK;
-        let r = &mut *self.run;
-        r.instr_sum = r.instr_sum.saturating_add(instr);
-        if instr > r.instr_max {
-            r.instr_max = instr;
-            r.instr_max_at = n as u32;
-        }
-        let systick = self.counter.now();
-        if r.period_ticks == 0 && previous_edges != 0 {
-            r.period_ticks = self.last_entry.wrapping_sub(systick) & 0xFF_FFFF;
-        }
-        self.last_entry = systick;
-        r.late += u32::from(late);
-        r.missed += missed;
-        let mut board_flags = self.check.check(self.vector.timestamp(n), missed) | self.boot_flags;
-        if late {
-            board_flags |= status::OVERRUN;
-        }
-        self.boot_flags = 0;
-        for (c, rec) in out.iter_mut().enumerate() {
-            let expected = self.vector.expected(n, c);
-            if rec.compensated.to_bits() != expected.compensated.to_bits()
-                || rec.status != expected.status
-            {
-                r.mismatches += 1;
-            }
-            r.hash = fold_hash(r.hash, rec);
-            rec.status |= board_flags;
-            if rec.status != 0 {
-                r.flagged += 1;
-            }
-        }
-        let frame = self
-            .app
-            .frame(n as u32, self.vector.timestamp(n), TICK_HZ, out);
-        let mut bytes = [0u8; MAX_FRAME_LEN];
-        if let Ok(len) = frame.encode(&mut bytes) {
-            self.uart.write_all(bytes.get(..len).unwrap_or(&[]));
-        }
-        if (n as u32 + 1).is_multiple_of(REPORT_PERIODS) {
-            self.send_report(n as u32 + 1);
-        }
-        let r = &mut *self.run;
-        r.samples += 1;
-        r.next = n as u32 + 1;
-        if injected & HANG != 0 {
-            // The loop hangs: only the watchdog gets the board out of here.
-            #[allow(clippy::empty_loop)]
-            loop {}
-        }
-        if injected & STALL != 0 {
-            // This sample overruns its period by half a period: the next one is late.
-            while self.time.now().wrapping_sub(entry) < PERIOD + PERIOD / 2 {}
-        }
-        if injected & MISS != 0 {
-            // This sample overruns past the next timer edge: that period is missed entirely.
-            while self.time.now().wrapping_sub(entry) < 2 * PERIOD + PERIOD / 2 {}
-        }
-    }
 }
 
 /// The bytes between two linker symbols.
@@ -508,32 +365,6 @@ fn main() -> ! {
     finish(paint_bottom, paint_top, committed)
 }
 
-/// The update task's state, in its static before the UART interrupt is unmasked. Not inlined,
-/// like `start_loop`.
-#[inline(never)]
-fn install_update(flash: RamFlash, active: Option<Active>) {
-    let update: *mut Option<Updater> = &raw mut UPDATE;
-    // SAFETY: the UART interrupt, UPDATE's only other user, is not unmasked yet.
-    unsafe {
-        *update = Some(Updater {
-            task: UpdateTask::new(QEMU_LAYOUT, active),
-            flash,
-        });
-    }
-}
-
-/// The update task runs in UART 0's receive interrupt, below the sample timer's priority, so the
-/// loop preempts it (an erase, a chunk, the read-back CRC) at every timer edge.
-#[inline(never)]
-fn start_update(mut nvic: NVIC) -> Uart {
-    // SAFETY: priorities change before either interrupt is unmasked; a lower number preempts.
-    unsafe {
-        nvic.set_priority(Irq(TIMER0_IRQ as u16), 0x00);
-        nvic.set_priority(Irq(UART0_RX_IRQ as u16), 0x80);
-    }
-    Uart::handle0()
-}
-
 /// Starts the sample timer and hands the loop's state to the interrupt. Not inlined: the `Loop`
 /// is built in this frame, which is gone before the interrupt runs on top of `main`'s.
 #[inline(never)]
@@ -649,34 +480,6 @@ unsafe fn DefaultHandler(irqn: i16) {
         });
     } else if irqn == UART0_RX_IRQ {
         on_receive();
-    }
-}
-
-/// UART 0's receive interrupt: every waiting byte through the update task, each reply sent whole.
-fn on_receive() {
-    let update: *mut Option<Updater> = &raw mut UPDATE;
-    // SAFETY: `main` set UPDATE before unmasking this interrupt and touches it again only after
-    // masking it; the interrupt does not preempt itself.
-    let Some(u) = (unsafe { (*update).as_mut() }) else {
-        return;
-    };
-    let port = Uart::handle0();
-    port.clear_rx_interrupt();
-    let mut reply = [0u8; MAX_REPLY];
-    while let Some(byte) = port.read() {
-        // The new image must read and be made for this unit: an image for another unit is
-        // refused before the commit, so the unit keeps its models.
-        let validate = |f: &mut RamFlash, off, len| {
-            f.bytes(off, len)
-                .is_some_and(|b| validates(b, 0, len) && check_unit(b, UNIT_SERIAL).is_ok())
-        };
-        if let Some(n) = u
-            .task
-            .push(byte, &mut u.flash, &SERIAL, validate, &mut reply)
-        {
-            // Whole, between two frames of the loop: the timer interrupt waits for these bytes.
-            cortex_m::interrupt::free(|_| port.write_all(reply.get(..n).unwrap_or(&[])));
-        }
     }
 }
 
