@@ -93,7 +93,8 @@ impl Context<'_> {
         if self.therm_names.len() > 1 {
             vec![(
                 "T".to_string(),
-                format!("mean({})", self.therm_names.join(", ")),
+                tcomp_core::expr::mean(self.therm_names.iter().map(|n| tcomp_core::expr::name(n)))
+                    .to_string(),
             )]
         } else {
             Vec::new()

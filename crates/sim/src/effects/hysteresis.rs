@@ -5,6 +5,7 @@ use tcomp_core::{EffectKind, SensorKind};
 
 use super::context::{Input, RowInputs};
 use super::text::{check_finite, check_pos, num, rate_expr};
+use tcomp_core::expr;
 use super::{Context, EffectModel, EffectState, EffectTruth, Terms};
 use super::{default_input, default_window, per_sensor};
 use crate::error::Result;
@@ -46,7 +47,7 @@ impl EffectState for State {
 
 /// `hyst(rate(x), threshold)`.
 fn expression(x: &str, window_s: f64, threshold: f64) -> String {
-    format!("hyst({}, {})", rate_expr(x, window_s), num(threshold))
+    expr::hyst(rate_expr(x, window_s), threshold).to_string()
 }
 
 impl EffectModel for Hysteresis {

@@ -41,7 +41,7 @@ impl EffectState for State {
 
 /// `lag(x, tau)`.
 fn expression(x: &str, tau_s: f64) -> String {
-    format!("lag({x}, {})", num(tau_s))
+    tcomp_core::expr::lag(tcomp_core::expr::name(x), tau_s).to_string()
 }
 
 impl EffectModel for LaggedElement {

@@ -1,6 +1,7 @@
 //! `Σ c_k·(T − t0)^k`, k = 1..=5: the polynomial in temperature every sensor has.
 
 use serde::{Deserialize, Serialize};
+use tcomp_core::expr::{self, Expr};
 use tcomp_core::{EffectKind, SensorKind};
 
 use super::context::{Input, RowInputs};
@@ -43,17 +44,16 @@ impl EffectState for State {
 }
 
 /// The expressions of the powers 1..=`degree` of `base` (`x - t0`).
-fn power_exprs(base: &str, degree: usize) -> Vec<String> {
+fn power_exprs(base: &Expr, degree: usize) -> Vec<String> {
     (1..=degree)
         .map(|k| match k {
             1 => base.to_string(),
-            2 => format!("sq({base})"),
             _ => {
-                let mut e = format!("sq({base})");
+                let mut e = expr::sq(base.clone());
                 for _ in 2..k {
-                    e = format!("({base}) * {e}");
+                    e = base.clone() * e;
                 }
-                e
+                e.to_string()
             }
         })
         .collect()

@@ -67,7 +67,7 @@ impl EffectModel for Rate {
         Terms::single(
             self.coefficient,
             format!("{} per (degC/min)", ctx.unit),
-            rate_expr(&x, self.window_s),
+            rate_expr(&x, self.window_s).to_string(),
             format!("rate of temperature d{x}/dt (degC/min)"),
         )
         .into_truth(Self::KIND)

@@ -39,7 +39,7 @@ impl EffectState for State {
 
 /// `x * rate(x)`.
 fn expression(x: &str, window_s: f64) -> String {
-    format!("{x} * {}", rate_expr(x, window_s))
+    (tcomp_core::expr::name(x) * rate_expr(x, window_s)).to_string()
 }
 
 impl EffectModel for Shupe {

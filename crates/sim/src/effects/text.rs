@@ -1,33 +1,35 @@
 //! The pieces of expression text the effects share, and the checks of their parameters.
 //!
-//! The effects' truth expressions are text in the core's feature language; these helpers are the
-//! only places that print numbers and operators into it.
+//! The effects' truth expressions are syntax trees of the core's feature language
+//! ([`tcomp_core::expr`]), printed by its one printer; these helpers build the pieces the effects
+//! share.
 
 use super::RATE_WINDOW_S;
 use crate::error::{Error, Result};
+use tcomp_core::expr::{self, Expr};
 
 /// A number as the expressions print it.
 pub(crate) fn num(x: f64) -> String {
-    format!("{x}")
+    Expr::num(x).to_string()
 }
 
 /// `x - c` written without unary minus.
-pub(crate) fn shifted(x: &str, c: f64) -> String {
+pub(crate) fn shifted(x: &str, c: f64) -> Expr {
     if c == 0.0 {
-        x.to_string()
+        expr::name(x)
     } else if c > 0.0 {
-        format!("{x} - {}", num(c))
+        expr::name(x) - Expr::num(c)
     } else {
-        format!("{x} + {}", num(-c))
+        expr::name(x) + Expr::num(-c)
     }
 }
 
 /// `rate(x)`, with the window only when it is not the core's default.
-pub(crate) fn rate_expr(x: &str, window_s: f64) -> String {
+pub(crate) fn rate_expr(x: &str, window_s: f64) -> Expr {
     if window_s == RATE_WINDOW_S {
-        format!("rate({x})")
+        expr::rate(expr::name(x))
     } else {
-        format!("rate({x}, {})", num(window_s))
+        expr::rate_window(expr::name(x), window_s)
     }
 }
 

@@ -42,7 +42,9 @@ impl EffectState for State {
 
 /// `1 - (time_s - lag(time_s, tau)) / D`.
 fn expression(tau_s: f64, d: f64) -> String {
-    format!("1 - (time_s - lag(time_s, {})) / {}", num(tau_s), num(d))
+    use tcomp_core::expr::{self, Expr};
+    let time = || expr::name("time_s");
+    (Expr::num(1.0) - (time() - expr::lag(time(), tau_s)) / Expr::num(d)).to_string()
 }
 
 impl EffectModel for Warmup {
