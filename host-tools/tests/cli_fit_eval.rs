@@ -128,22 +128,7 @@ fn fit_eval_inspect() {
 #[test]
 fn image_refuses_a_model_the_firmware_cannot_hold() {
     let dir = tempfile::tempdir().unwrap();
-    let csv = dir.path().join("run.csv");
-    let mut s = String::from("time_s,a,b,c,d,e,gyro\n");
-    for i in 0..3000 {
-        let t = i as f64;
-        let a = 20.0 + 15.0 * (t / 500.0).sin();
-        let b = 20.0 + 10.0 * (t / 310.0).cos();
-        let c = 5.0 * (t / 170.0).sin();
-        let d = 3.0 * (t / 90.0).cos();
-        let e = 2.0 * (t / 1300.0).sin();
-        let noise = 0.01 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5);
-        s.push_str(&format!(
-            "{t},{a},{b},{c},{d},{e},{}\n",
-            0.02 * a + 0.01 * b * c + 0.005 * d * e + noise
-        ));
-    }
-    std::fs::write(&csv, s).unwrap();
+    let csv = write_five_input_run(dir.path());
     let c = csv.to_str().unwrap();
     let big = dir.path().join("big.tcm");
     let small = dir.path().join("small.tcm");
@@ -180,47 +165,7 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
     ];
     // A description whose channel 3 takes the small model (inputs a, b, c); the flight check
     // refuses the big one before the channel's own checks.
-    let board = image.with_file_name("board.toml");
-    std::fs::write(
-        &board,
-        r#"name = "test"
-[[thermometer]]
-name = "ta"
-adc = 0
-input = 0
-type = "pt100"
-[[thermometer]]
-name = "tb"
-adc = 0
-input = 1
-type = "pt100"
-[[thermometer]]
-name = "tc"
-adc = 0
-input = 2
-type = "pt100"
-[[channel]]
-id = 0
-name = "zero"
-sensor = "other"
-axis = "x"
-unit = "u"
-counter = 0
-scale = 1.0
-inputs = { a = "ta" }
-[[channel]]
-id = 3
-name = "three"
-sensor = "other"
-axis = "x"
-unit = "u"
-counter = 3
-scale = 1.0
-inputs = { a = "ta", b = "tb", c = "tc" }
-"#,
-    )
-    .unwrap();
-    let board = board.display().to_string();
+    let board = write_test_board(dir.path());
     let out = fit(&big, &five);
     succeeded(&out);
     let err = String::from_utf8_lossy(&out.stderr);
@@ -282,4 +227,70 @@ inputs = { a = "ta", b = "tb", c = "tc" }
     ]);
     succeeded(&out);
     assert!(image.exists());
+}
+
+/// A 3000-row run whose `gyro` depends on five inputs (`a`–`e`), too many for the firmware.
+fn write_five_input_run(dir: &std::path::Path) -> std::path::PathBuf {
+    let csv = dir.join("run.csv");
+    let mut s = String::from("time_s,a,b,c,d,e,gyro\n");
+    for i in 0..3000 {
+        let t = i as f64;
+        let a = 20.0 + 15.0 * (t / 500.0).sin();
+        let b = 20.0 + 10.0 * (t / 310.0).cos();
+        let c = 5.0 * (t / 170.0).sin();
+        let d = 3.0 * (t / 90.0).cos();
+        let e = 2.0 * (t / 1300.0).sin();
+        let noise = 0.01 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5);
+        s.push_str(&format!(
+            "{t},{a},{b},{c},{d},{e},{}\n",
+            0.02 * a + 0.01 * b * c + 0.005 * d * e + noise
+        ));
+    }
+    std::fs::write(&csv, s).unwrap();
+    csv
+}
+
+/// A board description with channel 0 (input `a`) and channel 3 (inputs `a`, `b`, `c`).
+fn write_test_board(dir: &std::path::Path) -> String {
+    let board = dir.join("board.toml");
+    std::fs::write(
+        &board,
+        r#"name = "test"
+[[thermometer]]
+name = "ta"
+adc = 0
+input = 0
+type = "pt100"
+[[thermometer]]
+name = "tb"
+adc = 0
+input = 1
+type = "pt100"
+[[thermometer]]
+name = "tc"
+adc = 0
+input = 2
+type = "pt100"
+[[channel]]
+id = 0
+name = "zero"
+sensor = "other"
+axis = "x"
+unit = "u"
+counter = 0
+scale = 1.0
+inputs = { a = "ta" }
+[[channel]]
+id = 3
+name = "three"
+sensor = "other"
+axis = "x"
+unit = "u"
+counter = 3
+scale = 1.0
+inputs = { a = "ta", b = "tb", c = "tc" }
+"#,
+    )
+    .unwrap();
+    board.display().to_string()
 }
