@@ -118,40 +118,48 @@ fn fit_models(work: &Path) -> Result<()> {
     Ok(())
 }
 
+/// QEMU's mps2-an386 running the replay ELF `elf` with `image` loaded at the start of the models
+/// region (slot A) and `vector` in the replay region, UART 0 on `serial` (`file:PATH`, `pty`), one
+/// instruction per 8 ns of virtual time.
+pub fn qemu_command(elf: &Path, image: &Path, vector: &Path, serial: &str) -> Command {
+    let mut qemu = Command::new("qemu-system-arm");
+    qemu.args([
+        "-cpu",
+        "cortex-m4",
+        "-machine",
+        "mps2-an386",
+        "-nographic",
+        "-monitor",
+        "none",
+        "-semihosting-config",
+        "enable=on,target=native",
+        "-icount",
+        "shift=3,sleep=off",
+        "-serial",
+        serial,
+    ])
+    .arg("-kernel")
+    .arg(elf)
+    .arg("-device")
+    .arg(format!(
+        "loader,file={},addr=0x3F0000,force-raw=on",
+        image.display()
+    ))
+    .arg("-device")
+    .arg(format!(
+        "loader,file={},addr=0x21000000,force-raw=on",
+        vector.display()
+    ));
+    qemu
+}
+
 /// Runs the replay binary under QEMU with `image` and `vector` loaded and UART 0 captured into
 /// `uart`, decodes its defmt output (boot messages and the summary, over semihosting) with
 /// `defmt-print`, and returns the decoded text; fails on QEMU's exit code. QEMU restarts the guest
 /// on a watchdog reset (no `-no-reboot`): the loaders and the ELF are loaded again, the rest of RAM
 /// and the UART capture go on.
 fn run_qemu(elf: &Path, image: &Path, vector: &Path, uart: &Path) -> Result<String> {
-    let mut qemu = Command::new("qemu-system-arm")
-        .args([
-            "-cpu",
-            "cortex-m4",
-            "-machine",
-            "mps2-an386",
-            "-nographic",
-            "-monitor",
-            "none",
-            "-semihosting-config",
-            "enable=on,target=native",
-            "-icount",
-            "shift=3,sleep=off",
-            "-serial",
-        ])
-        .arg(format!("file:{}", uart.display()))
-        .arg("-kernel")
-        .arg(elf)
-        .arg("-device")
-        .arg(format!(
-            "loader,file={},addr=0x3F0000,force-raw=on",
-            image.display()
-        ))
-        .arg("-device")
-        .arg(format!(
-            "loader,file={},addr=0x21000000,force-raw=on",
-            vector.display()
-        ))
+    let mut qemu = qemu_command(elf, image, vector, &format!("file:{}", uart.display()))
         .stdout(Stdio::piped())
         .spawn()
         .context("starting qemu-system-arm")?;

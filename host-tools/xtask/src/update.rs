@@ -94,34 +94,7 @@ fn start_qemu(
     BufReader<std::process::ChildStdout>,
     String,
 )> {
-    let mut qemu = Command::new("qemu-system-arm")
-        .args([
-            "-cpu",
-            "cortex-m4",
-            "-machine",
-            "mps2-an386",
-            "-nographic",
-            "-monitor",
-            "none",
-            "-semihosting-config",
-            "enable=on,target=native",
-            "-icount",
-            "shift=3,sleep=off",
-            "-serial",
-            "pty",
-        ])
-        .arg("-kernel")
-        .arg(elf)
-        .arg("-device")
-        .arg(format!(
-            "loader,file={},addr=0x3F0000,force-raw=on",
-            initial.display()
-        ))
-        .arg("-device")
-        .arg(format!(
-            "loader,file={},addr=0x21000000,force-raw=on",
-            vector.display()
-        ))
+    let mut qemu = crate::qemu::qemu_command(elf, initial, vector, "pty")
         .stdout(Stdio::piped())
         .spawn()
         .context("starting qemu-system-arm")?;

@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 use tcomp_core::{EffectKind, SensorKind};
 
 use super::context::{Input, RowInputs};
-use super::text::{check_finite, check_pos, rate_expr};
+use super::text::{check_windowed, rate_expr};
 use super::{Context, EffectModel, EffectState, EffectTruth, Terms};
 use super::{default_input, default_window, per_sensor};
 use crate::error::Result;
@@ -48,10 +48,7 @@ impl EffectModel for Rate {
     }
 
     fn validate(&self, ctx: &Context<'_>, at: &str) -> Result<()> {
-        check_finite(self.coefficient, format!("{at}.coefficient"))?;
-        check_pos(self.window_s, format!("{at}.window_s"))?;
-        ctx.input(&self.input, &format!("{at}.input"))?;
-        Ok(())
+        check_windowed(ctx, at, self.coefficient, self.window_s, &self.input)
     }
 
     fn state(&self, ctx: &Context<'_>, _dt: f64) -> Result<Box<dyn EffectState>> {

@@ -50,3 +50,18 @@ pub(crate) fn check_pos(v: f64, field: String) -> Result<()> {
         Err(Error::invalid(field, format!("must be > 0, got {v}")))
     }
 }
+
+/// The checks of an effect with a coefficient, a rate window and an input (`<at>.coefficient`
+/// finite, `<at>.window_s` positive, `<at>.input` a column or signal of the run).
+pub(crate) fn check_windowed(
+    ctx: &super::Context<'_>,
+    at: &str,
+    coefficient: f64,
+    window_s: f64,
+    input: &str,
+) -> Result<()> {
+    check_finite(coefficient, format!("{at}.coefficient"))?;
+    check_pos(window_s, format!("{at}.window_s"))?;
+    ctx.input(input, &format!("{at}.input"))?;
+    Ok(())
+}
