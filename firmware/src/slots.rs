@@ -9,7 +9,7 @@
 //! `probe-rs download` or QEMU's loader put there, and an update then writes slot B and wins.
 //! Failing both, no models: every channel runs `NO_MODEL`.
 
-use embedded_storage::nor_flash::{ErrorType, NorFlashErrorKind, ReadNorFlash};
+use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 use tcomp_core::image::Image;
 use tcomp_core::slots::{Active, Header, Layout, SlotId, select};
 
@@ -131,6 +131,85 @@ pub fn choose_mapped<'a>(layout: &Layout, region: &'a [u8]) -> Choice<'a> {
     choose(&mut Mapped(region), layout, region)
 }
 
+/// A part's flash seen as its `MODELS` region: offsets from the region's start (`base` in the
+/// part's flash), with an erase of an already-erased range skipped.
+///
+/// Why the skip: on a single-bank part (the STM32F407) a sector erase stalls every flash fetch for
+/// 1–2 s, so the 200 Hz loop would stop. The board erases the inactive slot at boot
+/// ([`erase_inactive`], before the loop and the watchdog start), so the erase an update begins with
+/// finds it blank and costs a read of the region instead; programming stalls the loop for one word
+/// at a time (microseconds). Skipping the erase of a blank range changes nothing the power-loss
+/// proof relies on: the range is exactly what the erase would have left.
+pub struct Windowed<'m, F> {
+    /// The part's flash (offsets from its start).
+    pub flash: F,
+    /// Where the region starts in it.
+    pub base: u32,
+    /// The region, memory-mapped, for the blank check.
+    pub mapped: &'m [u8],
+}
+
+impl<F: ErrorType> ErrorType for Windowed<'_, F> {
+    type Error = F::Error;
+}
+
+impl<F: ReadNorFlash> ReadNorFlash for Windowed<'_, F> {
+    const READ_SIZE: usize = F::READ_SIZE;
+
+    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+        self.flash.read(self.base.saturating_add(offset), bytes)
+    }
+
+    fn capacity(&self) -> usize {
+        self.mapped.len()
+    }
+}
+
+impl<F: NorFlash> NorFlash for Windowed<'_, F> {
+    const WRITE_SIZE: usize = F::WRITE_SIZE;
+    const ERASE_SIZE: usize = F::ERASE_SIZE;
+
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        let blank = self
+            .mapped
+            .get(from as usize..to as usize)
+            .is_some_and(|r| r.iter().all(|&b| b == 0xFF));
+        if blank {
+            return Ok(());
+        }
+        self.flash
+            .erase(self.base.saturating_add(from), self.base.saturating_add(to))
+    }
+
+    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        self.flash.write(self.base.saturating_add(offset), bytes)
+    }
+}
+
+/// Erases the slot an update would write (the one that is not `active`, A when none is) unless it is blank, so
+/// that an update never has to erase while the loop runs. Call it at boot, before the loop and
+/// the watchdog start. Returns whether an erase was needed.
+pub fn erase_inactive<F: NorFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    active: Option<Active>,
+    mapped: &[u8],
+) -> Result<bool, F::Error> {
+    // The receiver's target ([`tcomp_core::update::Receiver::target`]): the other slot, or A when
+    // nothing is active (then nothing valid is lost).
+    let slot = active.map_or(SlotId::A, |a| a.slot.other());
+    let from = layout.base(slot);
+    let to = from.saturating_add(layout.size);
+    let blank = mapped
+        .get(from as usize..to as usize)
+        .is_some_and(|r| r.iter().all(|&b| b == 0xFF));
+    if blank {
+        return Ok(false);
+    }
+    flash.erase(from, to)?;
+    Ok(true)
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 mod tests {
@@ -231,5 +310,101 @@ mod tests {
             choose_mapped(&QEMU_LAYOUT, flash.bytes()).source,
             Source::None
         );
+    }
+
+    /// A flash that counts its erases.
+    struct Counting<'a> {
+        inner: &'a mut Flash,
+        erases: usize,
+    }
+
+    impl ErrorType for Counting<'_> {
+        type Error = <Flash as ErrorType>::Error;
+    }
+
+    impl ReadNorFlash for Counting<'_> {
+        const READ_SIZE: usize = 1;
+        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+            self.inner.read(offset, bytes)
+        }
+        fn capacity(&self) -> usize {
+            self.inner.capacity()
+        }
+    }
+
+    impl NorFlash for Counting<'_> {
+        const WRITE_SIZE: usize = <Flash as NorFlash>::WRITE_SIZE;
+        const ERASE_SIZE: usize = <Flash as NorFlash>::ERASE_SIZE;
+        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+            self.erases += 1;
+            self.inner.erase(from, to)
+        }
+        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+            self.inner.write(offset, bytes)
+        }
+    }
+
+    /// After the boot's erase of the inactive slot, a whole update through the window erases
+    /// nothing (no stall of a single-bank part's loop) and ends with the new image committed.
+    #[test]
+    fn an_update_after_the_boot_erase_erases_nothing() {
+        let mut flash = Flash::new();
+        assert!(matches!(update(&mut flash, &image(1)), Status::Done { .. }));
+        // Slot B holds garbage (a previous, older image): the boot erases it once.
+        flash.erase(32 * 1024, 64 * 1024).unwrap();
+        flash.write(32 * 1024, &[0u8; 64]).unwrap();
+        let region = flash.bytes().to_vec();
+        let active = choose(&mut Mapped(&region), &QEMU_LAYOUT, &region).active;
+        let mut counting = Counting {
+            inner: &mut flash,
+            erases: 0,
+        };
+        assert!(erase_inactive(&mut counting, &QEMU_LAYOUT, active, &region).unwrap());
+        assert_eq!(counting.erases, 1);
+        let region = flash.bytes().to_vec();
+        assert!(!erase_inactive(&mut flash, &QEMU_LAYOUT, active, &region).unwrap());
+
+        let mut task = UpdateTask::new(QEMU_LAYOUT, active);
+        let new = image(2);
+        let mut tx = Sender::new(&new);
+        let mut host = Decoder::new();
+        let mut frame = [0u8; MAX_FRAME];
+        let mut erases = 0;
+        while let Some(n) = tx.request(&mut frame) {
+            for &b in &frame[..n] {
+                let mapped = flash.bytes().to_vec();
+                let mut counting = Counting {
+                    inner: &mut flash,
+                    erases: 0,
+                };
+                let mut window = Windowed {
+                    flash: &mut counting,
+                    base: 0,
+                    mapped: &mapped,
+                };
+                let mut reply = [0u8; MAX_REPLY];
+                let validate = |f: &mut Windowed<'_, &mut Counting<'_>>, off, len| {
+                    validates(f.flash.inner.bytes(), off, len)
+                };
+                let answer = task.push(b, &mut window, b"SN", validate, &mut reply);
+                erases += counting.erases;
+                if let Some(m) = answer {
+                    for &r in &reply[..m] {
+                        if let Some(p) = host.push(r) {
+                            tx.on_reply(&p);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            matches!(tx.status(), Status::Done { .. }),
+            "{:?}",
+            tx.status()
+        );
+        assert_eq!(erases, 0, "the update erased while the loop would run");
+        let region = flash.bytes().to_vec();
+        let chosen = choose(&mut Mapped(&region), &QEMU_LAYOUT, &region);
+        assert_eq!(chosen.image, &new[..]);
     }
 }

@@ -35,22 +35,26 @@ fn models_region() -> &'static [u8] {
     let start = core::ptr::addr_of!(__models_start);
     let end = core::ptr::addr_of!(__models_end);
     let len = (end as usize).saturating_sub(start as usize);
-    // SAFETY: the linker symbols bound flash sectors 10–11, which are always readable and which
-    // this firmware never writes (it has no update task yet); erased flash reads 0xFF, which the
-    // slot and image readers reject.
+    // SAFETY: the linker symbols bound flash sectors 10–11, which are always readable; the update
+    // task writes only the inactive slot, which no running model borrows from; erased flash reads
+    // 0xFF, which the slot and image readers reject.
     unsafe { core::slice::from_raw_parts(start, len) }
 }
 
 /// The image to run: the newest committed slot that validates, else a bare image a probe wrote
 /// at slot A, else none (`tcomp_firmware::slots`).
-fn models_image() -> &'static [u8] {
+fn models_choice() -> tcomp_firmware::slots::Choice<'static> {
     let choice = tcomp_firmware::slots::choose_mapped(
         &tcomp_firmware::slots::STM32F4_LAYOUT,
         models_region(),
     );
     defmt::info!("models: {}", choice.source);
-    choice.image
+    choice
 }
+
+/// Offset of the `MODELS` region (sector 10) from the start of the part's flash, as the HAL's
+/// `NorFlash` counts.
+const MODELS_OFFSET: u32 = 0x000C_0000;
 
 /// Start of the STM32F4's one-time-programmable area (RM0090 §3.8: 512 bytes in 16 blocks of
 /// 32 bytes, and a lock byte per block at 0x1FFF_7A00). Block 0's first 8 bytes hold the unit
@@ -82,21 +86,32 @@ mod app {
     use crate::CONFIG;
     use embedded_hal_bus::util::AtomicCell;
     use heapless::spsc::{Consumer, Producer, Queue};
+    use stm32f4xx_hal::flash::{FlashExt, LockedFlash};
     use stm32f4xx_hal::pac::Interrupt;
     use stm32f4xx_hal::prelude::*;
+    use stm32f4xx_hal::serial::RxISR;
     use stm32f4xx_hal::serial::{TxISR, TxListen};
     use stm32f4xx_hal::timer::Flag;
     use tcomp_core::frame::{BootReport, MAX_FRAME_LEN};
+    use tcomp_core::slots::Active;
     use tcomp_firmware::app::{App, MAX_CHANNELS, Record, status};
     use tcomp_firmware::boot::REPORT_PERIODS;
+    use tcomp_firmware::image::check_unit;
+    use tcomp_firmware::slots::{STM32F4_LAYOUT, Windowed, erase_inactive, validates};
+    use tcomp_firmware::update::{MAX_REPLY, UpdateTask, serial_text};
 
     use crate::setup::{
-        self, CYCLES_PER_PERIOD, Counters, FrameTx, SampleTimer, Spi1Bus, TICK_HZ, TICKS_PER_PERIOD,
+        self, CYCLES_PER_PERIOD, Counters, FrameTx, SampleTimer, Spi1Bus, TICK_HZ,
+        TICKS_PER_PERIOD, UpdateRx,
     };
     use stm32f4xx_hal::watchdog::IndependentWatchdog;
 
     #[shared]
-    struct Shared {}
+    struct Shared {
+        /// The UART queue: the sample task's frames and the update task's replies, each
+        /// enqueued whole.
+        producer: Producer<'static, u8>,
+    }
 
     #[local]
     struct Local {
@@ -105,9 +120,14 @@ mod app {
         counters: Counters,
         timer: SampleTimer,
         watchdog: IndependentWatchdog,
-        producer: Producer<'static, u8>,
         consumer: Consumer<'static, u8>,
         tx: FrameTx,
+        rx: UpdateRx,
+        flash: LockedFlash,
+        update: UpdateTask,
+        /// The unit's serial as the update protocol's HELLO answer spells it.
+        serial: [u8; 18],
+        unit: u64,
         /// What this boot loaded: sent first, then every `REPORT_PERIODS` periods.
         report: BootReport,
     }
@@ -142,7 +162,12 @@ mod app {
         }
         let app = cx.local.app_state;
         let unit = crate::unit_serial();
-        let image = crate::models_image();
+        let choice = crate::models_choice();
+        let image = choice.image;
+        let mut flash = devices.flash;
+        prepare_update_slot(&mut flash, choice.active);
+        let mut iwdg = devices.watchdog;
+        iwdg.start(setup::WATCHDOG_MS.millis());
         let loaded = app.load_for_unit(
             image,
             unit,
@@ -176,16 +201,20 @@ mod app {
         }
         let (producer, consumer) = cx.local.queue.split();
         (
-            Shared {},
+            Shared { producer },
             Local {
                 app,
                 thermometers: devices.thermometers,
                 counters: devices.counters,
                 timer: devices.timer,
-                watchdog: devices.watchdog,
-                producer,
+                watchdog: iwdg,
                 consumer,
                 tx: devices.tx,
+                rx: devices.rx,
+                flash,
+                update: UpdateTask::new(STM32F4_LAYOUT, choice.active),
+                serial: serial_text(unit),
+                unit,
                 report,
             },
         )
@@ -199,12 +228,12 @@ mod app {
     }
 
     /// One loop period, on TIM2's update.
-    #[task(binds = TIM2, priority = 2, local = [
-        app, thermometers, counters, timer, watchdog, producer, report,
+    #[task(binds = TIM2, priority = 2, shared = [producer], local = [
+        app, thermometers, counters, timer, watchdog, report,
         sequence: u32 = 0, periods: u64 = 0, overruns: u32 = 0, dropped: u32 = 0, late: bool = false,
         missed: u32 = 0, last_cycles: Option<u32> = None,
     ])]
-    fn sample(cx: sample::Context) {
+    fn sample(mut cx: sample::Context) {
         let l = cx.local;
         l.timer.clear_flags(Flag::Update);
         *l.periods += 1;
@@ -245,12 +274,10 @@ mod app {
             // timed path: the sample is done).
             l.report.sequence = *l.sequence;
             let mut buf = [0u8; MAX_FRAME_LEN];
-            if let Some(len) = l.report.encode(&mut buf)
-                && l.producer.capacity() - l.producer.len() >= len
-            {
-                for &b in buf.get(..len).unwrap_or(&[]) {
-                    let _ = l.producer.enqueue(b);
-                }
+            if let Some(len) = l.report.encode(&mut buf) {
+                cx.shared
+                    .producer
+                    .lock(|p| enqueue_whole(p, buf.get(..len).unwrap_or(&[])));
             }
         }
         let frame = l.app.frame(
@@ -262,11 +289,11 @@ mod app {
         *l.sequence = l.sequence.wrapping_add(1);
         let mut buf = [0u8; MAX_FRAME_LEN];
         if let Ok(len) = frame.encode(&mut buf) {
-            let free = l.producer.capacity() - l.producer.len();
-            if free >= len {
-                for &b in buf.get(..len).unwrap_or(&[]) {
-                    let _ = l.producer.enqueue(b);
-                }
+            let sent = cx
+                .shared
+                .producer
+                .lock(|p| enqueue_whole(p, buf.get(..len).unwrap_or(&[])));
+            if sent {
                 rtic::pend(Interrupt::USART1);
             } else {
                 *l.dropped = l.dropped.wrapping_add(1);
@@ -284,12 +311,45 @@ mod app {
         }
     }
 
-    /// Drains the frame queue into USART1, one byte per TXE.
-    #[task(binds = USART1, priority = 1, local = [tx, consumer])]
-    fn uart(cx: uart::Context) {
-        let tx = cx.local.tx;
+    /// USART1, below the sample task: every received byte through the update task (which writes
+    /// only the inactive slot, already erased at boot, so the loop never waits for an erase), its
+    /// replies queued whole between frames; then drains the queue, one byte per TXE.
+    #[task(binds = USART1, priority = 1, shared = [producer], local = [
+        tx, rx, consumer, flash, update, serial, unit,
+    ])]
+    fn uart(mut cx: uart::Context) {
+        let l = cx.local;
+        while l.rx.is_rx_not_empty() {
+            let Ok(byte) = l.rx.read() else {
+                continue;
+            };
+            let mut reply = [0u8; MAX_REPLY];
+            let mut window = Windowed {
+                flash: l.flash.unlocked(),
+                base: crate::MODELS_OFFSET,
+                mapped: crate::models_region(),
+            };
+            let unit = *l.unit;
+            let validate = |w: &mut Windowed<'_, _>, off: u32, len: u32| {
+                let at = off as usize;
+                validates(w.mapped, off, len)
+                    && w.mapped
+                        .get(at..at.saturating_add(len as usize))
+                        .is_some_and(|b| check_unit(b, unit).is_ok())
+            };
+            if let Some(n) = l
+                .update
+                .push(byte, &mut window, &l.serial[..], validate, &mut reply)
+            {
+                // A reply that does not fit is dropped whole: the host repeats its request.
+                cx.shared
+                    .producer
+                    .lock(|p| enqueue_whole(p, reply.get(..n).unwrap_or(&[])));
+            }
+        }
+        let tx = l.tx;
         while tx.is_tx_empty() {
-            match cx.local.consumer.dequeue() {
+            match l.consumer.dequeue() {
                 Some(b) => {
                     let _ = tx.write(b);
                 }
@@ -300,5 +360,35 @@ mod app {
             }
         }
         tx.listen();
+    }
+
+    /// Enqueues `bytes` whole or not at all (a frame or a reply is never split or cut).
+    fn enqueue_whole(p: &mut Producer<'static, u8>, bytes: &[u8]) -> bool {
+        if p.capacity() - p.len() < bytes.len() {
+            return false;
+        }
+        for &b in bytes {
+            let _ = p.enqueue(b);
+        }
+        true
+    }
+
+    /// Erases the slot the next update will write unless it is blank, before the loop and the
+    /// watchdog start: a sector erase stalls every flash fetch of this single-bank part for 1–2 s,
+    /// which only the boot can afford. After it an update only programs words.
+    fn prepare_update_slot(flash: &mut LockedFlash, active: Option<Active>) {
+        let mut window = Windowed {
+            flash: flash.unlocked(),
+            base: crate::MODELS_OFFSET,
+            mapped: crate::models_region(),
+        };
+        match erase_inactive(&mut window, &STM32F4_LAYOUT, active, crate::models_region()) {
+            Ok(true) => defmt::info!("model update slot erased"),
+            Ok(false) => {}
+            Err(e) => defmt::warn!(
+                "model update slot: erase failed ({}), an update will erase it",
+                defmt::Debug2Format(&e)
+            ),
+        }
     }
 }

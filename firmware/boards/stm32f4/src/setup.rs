@@ -8,6 +8,7 @@
 //! | thermometers | SPI1, 12 × ADS1220 | SCK PA5, MISO PA6, MOSI PA7; CS PE0–PE11; DRDY PD0–PD11 (inputs: each conversion read once, when ready) | mode 1, ≤ 5 MHz |
 //! | counter block | SPI2, FPGA | SCK PB13, MISO PB14, MOSI PB15, CS PB12 | mode 0, ≤ 10 MHz |
 //! | frames out | USART1 TX | PA9 | 921,600 baud 8N1 |
+//! | model updates in | USART1 RX | PA10 | same link: `tcomp flash` (framed protocol, replies between frames) |
 //! | watchdog | IWDG | — | 50 ms (ten periods) |
 //!
 //! Thermometers 0–8 are the RLGs' (anode, cathode, shell of x, y, z), 9–11 the QMAs', as
@@ -18,11 +19,12 @@
 use embedded_hal::spi::{MODE_0, MODE_1};
 use embedded_hal_bus::spi::{AtomicDevice, ExclusiveDevice, NoDelay};
 use embedded_hal_bus::util::AtomicCell;
+use stm32f4xx_hal::flash::LockedFlash;
 use stm32f4xx_hal::gpio::{AnyPin, Input, Output, PB12};
 use stm32f4xx_hal::pac::{self, SPI1, SPI2, TIM2, USART1};
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config;
-use stm32f4xx_hal::serial::{self, Tx};
+use stm32f4xx_hal::serial::{self, Rx, RxListen, Tx};
 use stm32f4xx_hal::spi::Spi;
 use stm32f4xx_hal::timer::{CounterUs, Event};
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
@@ -69,6 +71,8 @@ pub type Counters = CounterBlock<ExclusiveDevice<Spi<SPI2>, PB12<Output>, NoDela
 pub type SampleTimer = CounterUs<TIM2>;
 /// The frame output.
 pub type FrameTx = Tx<USART1>;
+/// The model update's input (USART1 RX, PA10).
+pub type UpdateRx = Rx<USART1>;
 
 /// Everything the application uses, configured.
 pub struct Devices {
@@ -80,8 +84,12 @@ pub struct Devices {
     pub timer: SampleTimer,
     /// The frame output.
     pub tx: FrameTx,
-    /// The independent watchdog, started.
+    /// The independent watchdog, not started yet (`init` starts it, after the boot's slot erase).
     pub watchdog: IndependentWatchdog,
+    /// The update input.
+    pub rx: UpdateRx,
+    /// The part's flash, for the update task.
+    pub flash: LockedFlash,
     /// Why the chip last reset.
     pub reset_cause: ResetCause,
     /// The fault the previous run recorded, if any.
@@ -173,14 +181,17 @@ pub fn setup(
         ),
     }
 
-    let tx = dp
+    // USART1: frames out, and model updates in (`tcomp flash`), RXNE interrupt on.
+    let (tx, mut rx) = dp
         .USART1
-        .tx(
-            gpioa.pa9,
+        .serial(
+            (gpioa.pa9, gpioa.pa10),
             serial::Config::default().baudrate(BAUD.bps()),
             &mut rcc,
         )
-        .map_err(|_| SetupError::Uart)?;
+        .map_err(|_| SetupError::Uart)?
+        .split();
+    rx.listen();
 
     let mut timer = dp.TIM2.counter_us(&mut rcc);
     timer
@@ -188,8 +199,8 @@ pub fn setup(
         .map_err(|_| SetupError::Timer)?;
     timer.listen(Event::Update);
 
-    let mut watchdog = IndependentWatchdog::new(dp.IWDG);
-    watchdog.start(WATCHDOG_MS.millis());
+    // Started by `init` once the inactive model slot is erased (an erase takes 1–2 s).
+    let watchdog = IndependentWatchdog::new(dp.IWDG);
 
     Ok(Devices {
         thermometers,
@@ -197,6 +208,8 @@ pub fn setup(
         timer,
         tx,
         watchdog,
+        rx,
+        flash: LockedFlash::new(dp.FLASH),
         reset_cause,
         fault,
     })
