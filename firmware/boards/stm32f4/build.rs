@@ -27,11 +27,14 @@ fn main() -> Result<(), Box<dyn Error>> {
         .into());
     }
     let name = board.to_uppercase().replace('-', "_");
+    let rtds = rtd_table(&description)?;
     fs::write(
         out.join("board_config.rs"),
         format!(
             "/// The channel table this binary runs: `firmware/descriptions/{board}.toml` (`TCOMP_BOARD`).\n\
-             pub const CONFIG: &[tcomp_firmware::app::ChannelConfig] = &tcomp_firmware::wiring::{name};\n"
+             pub const CONFIG: &[tcomp_firmware::app::ChannelConfig] = &tcomp_firmware::wiring::{name};\n\
+             /// The RTD of each thermometer of `{board}.toml`, in its order (converter k, AIN0/AIN1).\n\
+             pub const RTDS: &[tcomp_hal::rtd::Rtd] = &[{rtds}];\n"
         ),
     )?;
     if env::var("TARGET").is_ok_and(|t| t.starts_with("thumb")) {
@@ -39,4 +42,39 @@ fn main() -> Result<(), Box<dyn Error>> {
         println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
     }
     Ok(())
+}
+
+/// Converters on this board: one ADS1220 per thermometer, with a PT100 front end (IDAC 1 mA,
+/// gain 4, the reference resistor `setup::R_REF_OHM`).
+const CONVERTERS: usize = 12;
+
+/// The description's thermometers as this board reads them, or why it cannot: thermometer `k` must
+/// be a PT100-class RTD (r0 = 100 Ω; its own a, b) on converter `k`, input 0 — the board wires one
+/// ADS1220 per thermometer and its front end is sized for 100 Ω.
+fn rtd_table(description: &std::path::Path) -> Result<String, Box<dyn Error>> {
+    let board = tcomp_board_description::Board::load(description)?;
+    let mut rtds = Vec::new();
+    for (k, t) in board.thermometer_rows().iter().enumerate() {
+        let place = format!("{}: thermometer `{}`", description.display(), t.name);
+        if k >= CONVERTERS || usize::from(t.adc) != k || t.input != 0 {
+            return Err(format!(
+                "{place}: this board reads thermometer k on converter k, input 0, for k < {CONVERTERS} \
+                 (it is number {k}, on converter {} input {})",
+                t.adc, t.input
+            )
+            .into());
+        }
+        match t.kind {
+            tcomp_core::image::ThermKind::Rtd { r0, a, b } if (r0 - 100.0).abs() < 1e-3 => rtds.push(
+                format!("tcomp_hal::rtd::Rtd::with_coefficients({r0:?}, {a:?}, {b:?}, tcomp_hal::rtd::Rtd::IEC_C)"),
+            ),
+            _ => {
+                return Err(format!(
+                    "{place}: this board's front end reads PT100-class RTDs only (r0 = 100 Ω)"
+                )
+                .into());
+            }
+        }
+    }
+    Ok(rtds.join(", "))
 }

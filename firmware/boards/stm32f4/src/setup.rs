@@ -139,7 +139,12 @@ pub fn setup(
     );
     let bus: &'static AtomicCell<Spi1Bus> = spi1.insert(AtomicCell::new(bus));
     let pins = thermometer_pins(gpiod, gpioe);
+    let mut k = 0;
     let mut thermometers = pins.map(|(mut pin, drdy)| {
+        // Thermometer k's element, from the board description (`TCOMP_BOARD`); a converter the
+        // description does not use is read as a PT100 and feeds no channel.
+        let rtd = crate::RTDS.get(k).copied().unwrap_or(Rtd::PT100);
+        k += 1;
         pin.set_high();
         // `new_no_delay` only drives CS high, which cannot fail on this pin (`Infallible`).
         let device = match AtomicDevice::new_no_delay(bus, pin) {
@@ -147,7 +152,7 @@ pub fn setup(
             Err(e) => match e {},
         };
         let adc = Ads1220::new(device, AdcConfig::rtd_4wire(IdacCurrent::Ua1000, Gain::G4));
-        OnReady::new(RtdThermometer::new(adc, Rtd::PT100, R_REF_OHM), drdy)
+        OnReady::new(RtdThermometer::new(adc, rtd, R_REF_OHM), drdy)
     });
     for (i, t) in thermometers.iter_mut().enumerate() {
         if let Err(e) = t.inner_mut().init(&mut delay) {
