@@ -82,9 +82,12 @@ fn segments(s: &mut String, rows: &[SegmentRow], worst: &[Interval], unit: &str)
     for w in worst {
         let _ = writeln!(
             s,
-            "    {:>7}–{:<7} min  mean residual {}  at {}° {}°/min  {}",
-            plain(w.start_s / 60.0, 3),
-            plain(w.end_s / 60.0, 3),
+            "    {:>16}  mean residual {}  at {}° {}°/min  {}",
+            format!(
+                "{}–{} min",
+                plain(w.start_s / 60.0, 3),
+                plain(w.end_s / 60.0, 3)
+            ),
             num(w.residual_mean, unit),
             plain(w.temperature, 3),
             signed(w.rate_per_min, 2),
