@@ -1,10 +1,68 @@
 //! The demo's report (`tcomp demo`, rendered by `render/html`) renders in a real headless browser
-//! (Debian's `chromium`): the page loads, every SVG plot lays out (the report's inline check writes
-//! the counts on `<body>`), and the verdict is there. Skipped, with a message, when chromium is not
-//! installed.
+//! (Debian's `chromium`): the page loads, every SVG plot lays out and holds data (the report's
+//! inline check writes the counts on `<body>`), and the verdict is there. So does `tcomp report` on
+//! the bursty LSM6DSM record (25 bursts of 5 s every 5 min), whose plots were once empty. The
+//! browser part is skipped, with a message, when chromium is not installed.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 use std::process::Command;
+
+/// The DOM of `html` after chromium ran its scripts; `None` (with a message) without chromium.
+fn dump_dom(html: &std::path::Path) -> Option<String> {
+    let Some(bin) = chromium() else {
+        println!("SKIPPED: chromium is not installed (apt-get install -y chromium)");
+        return None;
+    };
+    let profile = tempfile::tempdir().unwrap();
+    let out = Command::new(bin)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--no-first-run",
+            "--enable-logging=stderr",
+            "--v=0",
+        ])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .arg("--dump-dom")
+        .arg(format!("file://{}", html.display()))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "chromium failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("Uncaught"), "script error: {err}");
+    Some(String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+/// Every one of the page's `plots` plots laid out with data, as its inline check counted.
+fn assert_laid_out(dom: &str, plots: usize) {
+    assert!(
+        dom.contains(&format!("data-plots=\"{plots}\""))
+            && dom.contains(&format!("data-plots-ok=\"{plots}\"")),
+        "not every plot laid out; body: {}",
+        dom.lines().find(|l| l.contains("<body")).unwrap_or("")
+    );
+}
+
+/// The data marks of each plot of a report (its `data-points` attributes).
+fn points_per_plot(html: &str) -> Vec<usize> {
+    html.split("<svg class=\"plot\"")
+        .skip(1)
+        .map(|p| {
+            p.split("data-points=\"")
+                .nth(1)
+                .and_then(|v| v.split('"').next())
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(0)
+        })
+        .collect()
+}
 
 fn chromium() -> Option<String> {
     ["chromium", "chromium-browser", "google-chrome"]
@@ -40,42 +98,11 @@ fn demo_report_renders_in_headless_chromium() {
                 == text.matches("xmlns=\"http://www.w3.org/2000/svg\"").count(),
         "no network references"
     );
-    let Some(bin) = chromium() else {
-        println!("SKIPPED: chromium is not installed (apt-get install -y chromium)");
+    let Some(dom) = dump_dom(&html) else {
         return;
     };
-    let profile = tempfile::tempdir().unwrap();
-    let out = Command::new(bin)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--no-first-run",
-            "--enable-logging=stderr",
-            "--v=0",
-        ])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .arg("--dump-dom")
-        .arg(format!("file://{}", html.display()))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "chromium failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let dom = String::from_utf8_lossy(&out.stdout);
-    let err = String::from_utf8_lossy(&out.stderr);
     let plots = text.matches("<svg class=\"plot\"").count();
-    assert!(
-        dom.contains(&format!("data-plots=\"{plots}\""))
-            && dom.contains(&format!("data-plots-ok=\"{plots}\"")),
-        "not every plot laid out; body: {}",
-        dom.lines().find(|l| l.contains("<body")).unwrap_or("")
-    );
-    assert!(!err.contains("Uncaught"), "script error: {err}");
+    assert_laid_out(&dom, plots);
     assert!(dom.contains("id=\"verdict\""), "verdict missing");
     let verdict = dom
         .split("data-verdict=\"")
@@ -83,4 +110,75 @@ fn demo_report_renders_in_headless_chromium() {
         .and_then(|v| v.split('"').next())
         .unwrap_or("?");
     println!("chromium rendered {plots} plots; demo verdict {verdict}");
+}
+
+/// The bursty LSM6DSM record: a model fitted before 4000 s, reported on the rest (the held-out
+/// window): every plot holds data, units come from the column names, the channel is in the
+/// title, and the page lays out in chromium.
+#[test]
+fn bursty_record_report_has_non_empty_plots() {
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../data/realdata/lsm6dsm_tvac_cold_ramp.csv");
+    let dir = tempfile::tempdir().unwrap();
+    let model = dir.path().join("gyro_x.tcm");
+    let html = dir.path().join("report.html");
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let d = data.to_str().unwrap();
+    run(&[
+        "fit",
+        "--data",
+        d,
+        "--target",
+        "gyro_x_rad_s",
+        "--reference-value",
+        "0",
+        "--feature",
+        "temp_lsm6dsm_C",
+        "--until",
+        "4000",
+        "--average",
+        "2",
+        "--quiet",
+        "--out",
+        model.to_str().unwrap(),
+    ]);
+    run(&[
+        "report",
+        "--model",
+        model.to_str().unwrap(),
+        "--data",
+        d,
+        "--from",
+        "4000",
+        "--quiet",
+        "--out",
+        html.to_str().unwrap(),
+    ]);
+    let text = std::fs::read_to_string(&html).unwrap();
+    let points = points_per_plot(&text);
+    assert!(points.len() >= 3, "too few plots: {points:?}");
+    assert!(points.iter().all(|&n| n > 0), "an empty plot: {points:?}");
+    assert!(
+        text.contains("<h1>tcomp report: gyro_x_rad_s (rad/s)"),
+        "title"
+    );
+    assert!(
+        text.contains("residual (rad/s)") && text.contains("temperature (°C)"),
+        "units"
+    );
+    assert!(!text.contains(" ()"), "an axis without its unit");
+    let Some(dom) = dump_dom(&html) else {
+        return;
+    };
+    assert_laid_out(&dom, points.len());
+    println!(
+        "chromium rendered {} plots of the LSM6DSM record: {points:?}",
+        points.len()
+    );
 }

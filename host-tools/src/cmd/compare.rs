@@ -1,10 +1,12 @@
 //! `tcomp compare MODEL_A MODEL_B --data FILE [--json]`: before/after, overall and per segment.
+use super::json::{self, RunFigures, Subject};
 use super::run::RunArgs;
+use crate::render::num::{SIG, num, pct, plain};
 use clap::Args as ClapArgs;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+use tcomp_train::Dataset;
 use tcomp_train::metrics::{self, Run};
-use tcomp_train::{Dataset, EvalReport};
 
 /// Arguments of `tcomp compare`.
 #[derive(ClapArgs, Debug)]
@@ -25,24 +27,33 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    /// No progress display.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
+/// One segment of model A's run, with both models' residual std there.
 #[derive(Serialize)]
 struct SegmentPair {
     label: String,
     start_s: f64,
     end_s: f64,
-    raw_std: f64,
-    a_residual_std: f64,
-    b_residual_std: f64,
-    change_pct: f64,
+    raw_std: Option<f64>,
+    a_residual_std: Option<f64>,
+    b_residual_std: Option<f64>,
+    /// From A to B (%; negative when B's residual is smaller).
+    change_pct: Option<f64>,
 }
 
+/// The JSON of `tcomp compare`.
 #[derive(Serialize)]
 struct Comparison {
-    a: EvalReport,
-    b: EvalReport,
-    binned_change_pct: f64,
+    a: RunFigures,
+    b: RunFigures,
+    /// Residual std from A to B (%; negative when B's is smaller).
+    change_pct: Option<f64>,
+    /// The same on bin means.
+    binned_change_pct: Option<f64>,
     segments: Vec<SegmentPair>,
 }
 
@@ -75,21 +86,32 @@ pub fn time_and_first_input(path: &Path) -> anyhow::Result<(String, Option<Strin
     ))
 }
 
+/// A blob's target column (with `run`'s overrides) and unit.
+pub fn target_and_unit(path: &Path, run: &RunArgs) -> anyhow::Result<(String, String)> {
+    let bytes = tcomp_train::blob_io::read(path)?;
+    let model = tcomp_train::blob_io::decode(path, &bytes)?;
+    Ok((run.roles(&model).target, model.meta.unit.to_string()))
+}
+
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.bin > 0.0, "--bin must be positive");
     args.run.check_window()?;
     let (time, first) = time_and_first_input(&args.model_a)?;
+    let progress = super::progress::spinner(args.quiet, "loading data");
     let data = args.run.load(&time)?;
+    progress.set_message("running both models");
     let temp = args.temperature.clone().or(first);
     let ra = run_blob(&args.model_a, &data, temp.as_deref(), &args.run)?;
     let rb = run_blob(&args.model_b, &data, temp.as_deref(), &args.run)?;
+    progress.finish_and_clear();
     let (a, b) = (
-        metrics::report(&ra, args.bin),
-        metrics::report(&rb, args.bin),
+        RunFigures::from(&metrics::report(&ra, args.bin)),
+        RunFigures::from(&metrics::report(&rb, args.bin)),
     );
     let sa = tcomp_discover::segments::table(&ra);
     let sb = tcomp_discover::segments::table(&rb);
+    let has = |n: usize, v: f64| (n > 0).then_some(v);
     let segments: Vec<SegmentPair> = sa
         .iter()
         .zip(&sb)
@@ -97,46 +119,67 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             label: x.label.clone(),
             start_s: x.start_s,
             end_s: x.end_s,
-            raw_std: x.raw_std,
-            a_residual_std: x.residual_std,
-            b_residual_std: y.residual_std,
-            change_pct: 100.0 * (y.residual_std / x.residual_std.max(1e-300) - 1.0),
+            raw_std: has(x.samples, x.raw_std),
+            a_residual_std: has(x.samples, x.residual_std),
+            b_residual_std: has(y.samples, y.residual_std),
+            change_pct: json::change(
+                has(x.samples, x.residual_std),
+                has(y.samples, y.residual_std),
+            ),
         })
         .collect();
     let c = Comparison {
-        binned_change_pct: 100.0
-            * (b.binned.residual_std / a.binned.residual_std.max(1e-300) - 1.0),
+        change_pct: json::change(a.residual_std, b.residual_std),
+        binned_change_pct: json::change(a.binned.residual_std, b.binned.residual_std),
         a,
         b,
         segments,
     };
+    let (target, unit) = target_and_unit(&args.model_a, &args.run)?;
+    let subject = Subject::new(
+        vec![
+            args.model_a.display().to_string(),
+            args.model_b.display().to_string(),
+        ],
+        &target,
+        &unit,
+        &args.run.data,
+    );
     if args.json {
-        outln!("{}", serde_json::to_string_pretty(&c)?);
-        return Ok(());
+        return json::print("compare", &subject, &c);
     }
+    print_text(args, &c, subject.unit.as_deref().unwrap_or(""));
+    Ok(())
+}
+
+/// The human table: both models' figures, then each segment, every change negative when B's
+/// residual is smaller.
+fn print_text(args: &Args, c: &Comparison, unit: &str) {
+    let unit = super::printable::text(unit);
+    let n = |v: Option<f64>| v.map_or_else(|| "no data".into(), |v| num(v, &unit));
     outln!(
         "A = {}\nB = {}",
-        args.model_a.display(),
-        args.model_b.display()
+        super::printable::text(&args.model_a.display().to_string()),
+        super::printable::text(&args.model_b.display().to_string())
     );
-    outln!("{:<26} {:>12} {:>12} {:>9}", "", "A", "B", "change");
+    outln!("{:<26} {:>16} {:>16} {:>9}", "", "A", "B", "change");
     outln!(
-        "{:<26} {:>12.4e} {:>12.4e} {:>+8.1}%",
+        "{:<26} {:>16} {:>16} {:>9}",
         "residual std",
-        c.a.residual_std,
-        c.b.residual_std,
-        100.0 * (c.b.residual_std / c.a.residual_std.max(1e-300) - 1.0)
+        n(c.a.residual_std),
+        n(c.b.residual_std),
+        pct(c.change_pct)
     );
     outln!(
-        "{:<26} {:>12.4e} {:>12.4e} {:>+8.1}%",
-        format!("{} s bins residual std", args.bin),
-        c.a.binned.residual_std,
-        c.b.binned.residual_std,
-        c.binned_change_pct
+        "{:<26} {:>16} {:>16} {:>9}",
+        format!("{} s bins residual std", plain(args.bin, SIG)),
+        n(c.a.binned.residual_std),
+        n(c.b.binned.residual_std),
+        pct(c.binned_change_pct)
     );
     outln!();
     outln!(
-        "{:<26} {:>12} {:>12} {:>12} {:>9}",
+        "{:<26} {:>16} {:>16} {:>16} {:>9}",
         "segment",
         "raw std",
         "A resid",
@@ -145,13 +188,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     );
     for s in &c.segments {
         outln!(
-            "{:<26} {:>12.4e} {:>12.4e} {:>12.4e} {:>+8.1}%",
+            "{:<26} {:>16} {:>16} {:>16} {:>9}",
             s.label,
-            s.raw_std,
-            s.a_residual_std,
-            s.b_residual_std,
-            s.change_pct
+            n(s.raw_std),
+            n(s.a_residual_std),
+            n(s.b_residual_std),
+            pct(s.change_pct)
         );
     }
-    Ok(())
 }

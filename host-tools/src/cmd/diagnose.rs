@@ -1,5 +1,6 @@
 //! `tcomp diagnose --model MODEL --data FILE [--verify FILE] [--json]`: where the model fails and
 //! which physical effect is most likely missing, with the evidence and a stated criterion.
+use super::json::{self, Subject};
 use super::run::RunArgs;
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
@@ -36,6 +37,9 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
+    /// No progress display.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Runs the diagnosis (shared with `report`) on the rows of `--from/--until`.
@@ -55,7 +59,9 @@ pub fn analyse(args: &Args) -> anyhow::Result<(Analysis, Dataset)> {
     if args.run.overrides_reference() {
         opts.roles = Some(roles);
     }
+    let progress = super::progress::spinner(args.quiet, "diagnosing");
     let a = tcomp_discover::diagnose(&model, &data, verify.as_ref(), &opts)?;
+    progress.finish_and_clear();
     Ok((a, data))
 }
 
@@ -63,8 +69,15 @@ pub fn analyse(args: &Args) -> anyhow::Result<(Analysis, Dataset)> {
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let (a, _) = analyse(args)?;
     if args.json {
-        let json = serde_json::to_string_pretty(&a.diagnosis)?;
-        outln!("{}", super::printable::json(&json));
+        let d = &a.diagnosis;
+        let mut subject = Subject::new(
+            vec![args.model.display().to_string()],
+            &d.model.target,
+            &d.model.unit,
+            &args.run.data,
+        );
+        subject.verify = args.verify.as_ref().map(|v| v.display().to_string());
+        json::print("diagnose", &subject, &body(d)?)?;
     } else {
         // The model's target, unit and features come from the blob: no raw control characters.
         out!(
@@ -73,4 +86,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The diagnosis in the shared vocabulary: each candidate's held-out change as `change_pct`
+/// (negative when the residual fell) beside the analysis' `improvement_pct`.
+fn body(d: &tcomp_discover::Diagnosis) -> anyhow::Result<serde_json::Value> {
+    let mut v = serde_json::to_value(d)?;
+    if let Some(cands) = v.get_mut("candidates").and_then(|c| c.as_array_mut()) {
+        for (c, s) in cands.iter_mut().zip(&d.candidates) {
+            if let Some(obj) = c.as_object_mut() {
+                let change = json::change(Some(s.residual_std_before), Some(s.residual_std_after));
+                obj.insert("change_pct".into(), serde_json::to_value(change)?);
+            }
+        }
+    }
+    Ok(v)
 }

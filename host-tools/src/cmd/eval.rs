@@ -1,5 +1,7 @@
 //! `tcomp eval --model MODEL --data FILE`: measure a blob on a run, through the core's f32 evaluator.
+use super::json::{self, RunFigures, Subject};
 use super::run::RunArgs;
+use crate::render::num::{SIG, num, pct, plain, signed};
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
 use tcomp_train::EvalReport;
@@ -45,43 +47,56 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         args.run.run.gap,
     )?;
     progress.finish_and_clear();
+    let subject = Subject::new(
+        vec![args.model.display().to_string()],
+        &roles.target,
+        model.meta.unit,
+        &args.run.data,
+    );
     if args.json {
-        outln!("{}", serde_json::to_string_pretty(&report)?);
+        json::print("eval", &subject, &RunFigures::from(&report))?;
     } else {
-        print_report(&report, &super::printable::text(model.meta.unit));
+        let unit = subject.unit.as_deref().unwrap_or("");
+        print_report(&report, &super::printable::text(unit));
     }
     Ok(())
 }
 
 fn print_report(r: &EvalReport, unit: &str) {
-    let u = if unit.is_empty() { "" } else { unit };
+    let f = RunFigures::from(r);
+    let n = |v: Option<f64>| v.map_or_else(|| "no data".into(), |v| num(v, unit));
     outln!("samples          {}", r.samples);
-    outln!("raw std          {:.6e} {u}", r.raw_std);
-    outln!("residual std     {:.6e} {u}", r.residual_std);
-    outln!("improvement      {:.1} %", r.improvement_pct);
-    outln!("raw rms          {:.6e} {u}", r.raw_rms);
-    outln!("residual rms     {:.6e} {u}", r.residual_rms);
-    outln!("max |residual|   {:.6e} {u}", r.max_abs_residual);
-    outln!("MSD before       {:.6e}", r.msd_before);
-    outln!("MSD after        {:.6e}", r.msd_after);
+    outln!("raw std          {}", n(f.raw_std));
+    outln!("residual std     {}", n(f.residual_std));
+    outln!("change           {}", pct(f.change_pct));
+    outln!("raw rms          {}", n(f.raw_rms));
+    outln!("residual rms     {}", n(f.residual_rms));
+    outln!("max |residual|   {}", n(f.max_abs_residual));
+    let sq = if unit.is_empty() {
+        String::new()
+    } else {
+        format!("({unit})²")
+    };
+    outln!("MSD before       {}", num(r.msd_before, &sq));
+    outln!("MSD after        {}", num(r.msd_after, &sq));
     outln!(
-        "{} s bins ({})  raw std {:.6e}  residual std {:.6e}  improvement {:.1} %",
-        r.binned.seconds,
+        "{} s bins ({})  raw std {}  residual std {}  change {}",
+        plain(r.binned.seconds, SIG),
         r.binned.bins,
-        r.binned.raw_std,
-        r.binned.residual_std,
-        r.binned.improvement_pct
+        n(f.binned.raw_std),
+        n(f.binned.residual_std),
+        pct(f.binned.change_pct)
     );
     outln!(
-        "out of range     {:.1} % of samples; input faults {}; gaps {}",
-        r.out_of_range_pct,
+        "out of range     {} % of samples; input faults {}; gaps {}",
+        plain(r.out_of_range_pct, 3),
         r.input_faults,
         r.gaps
     );
     if !r.segments.is_empty() {
         outln!();
         outln!(
-            "{:<8} {:>10} {:>10} {:>10} {:>14} {:>14}",
+            "{:<8} {:>10} {:>10} {:>10} {:>16} {:>16}",
             "segment",
             "start s",
             "end s",
@@ -91,13 +106,13 @@ fn print_report(r: &EvalReport, unit: &str) {
         );
         for s in &r.segments {
             outln!(
-                "{:<8} {:>10.0} {:>10.0} {:>10.3} {:>14.6e} {:>14.6e}",
+                "{:<8} {:>10} {:>10} {:>10} {:>16} {:>16}",
                 s.kind,
-                s.start_s,
-                s.end_s,
-                s.rate_per_min,
-                s.raw_std,
-                s.residual_std
+                plain(s.start_s, SIG),
+                plain(s.end_s, SIG),
+                signed(s.rate_per_min, 3),
+                num(s.raw_std, unit),
+                num(s.residual_std, unit)
             );
         }
     }

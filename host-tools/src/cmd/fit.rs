@@ -1,5 +1,7 @@
 //! `tcomp fit --data FILE ... --out MODEL`: train a model and write its blob atomically.
+use super::json::{self, RunFigures, Subject};
 use super::run::RunArgs;
+use crate::render::num::{SIG, num, pct, plain};
 use anyhow::Context;
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
@@ -68,17 +70,32 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     progress.clear();
     let s = &fitted.summary;
     if args.json {
-        outln!("{}", serde_json::to_string_pretty(s)?);
+        let subject = Subject::new(
+            vec![args.out.display().to_string()],
+            &opts.target,
+            &opts.unit,
+            data_path,
+        );
+        // The training figures in the shared vocabulary (null where no bin held data).
+        let mut body = serde_json::to_value(s)?;
+        if let Some(obj) = body.as_object_mut() {
+            obj.insert(
+                "train".into(),
+                serde_json::to_value(RunFigures::from(&s.train))?,
+            );
+        }
+        json::print("fit", &subject, &body)?;
     } else {
         for w in &s.warnings {
             eprintln!("warning: {w}");
         }
-        print_summary(s, &args.out);
+        let unit = crate::render::num::unit_or_column(&opts.unit, &opts.target);
+        print_summary(s, &args.out, &super::printable::text(&unit));
     }
     Ok(())
 }
 
-fn print_summary(s: &FitSummary, out: &std::path::Path) {
+fn print_summary(s: &FitSummary, out: &std::path::Path, unit: &str) {
     let d = &s.details;
     outln!("method      {}", s.method);
     for sig in &s.signals {
@@ -134,15 +151,16 @@ fn print_summary(s: &FitSummary, out: &std::path::Path) {
         s.train_bins,
         s.average_s
     );
-    let t = &s.train;
+    let t = RunFigures::from(&s.train);
+    let n = |v: Option<f64>| v.map_or_else(|| "no data".into(), |v| num(v, unit));
     outln!(
-        "training    raw std {:.5e}  residual std {:.5e}  improvement {:.1} %   ({} s bins: {:.5e} → {:.5e})",
-        t.raw_std,
-        t.residual_std,
-        t.improvement_pct,
-        t.binned.seconds,
-        t.binned.raw_std,
-        t.binned.residual_std
+        "training    raw std {}  residual std {}  change {}   ({} s bins: {} → {})",
+        n(t.raw_std),
+        n(t.residual_std),
+        pct(t.change_pct),
+        plain(t.binned.seconds, SIG),
+        n(t.binned.raw_std),
+        n(t.binned.residual_std)
     );
     outln!("wrote       {} ({} bytes)", out.display(), s.blob_bytes);
 }

@@ -28,6 +28,7 @@ pub mod frames;
 pub mod image;
 pub mod inspect;
 mod inspect_image;
+pub mod json;
 mod output;
 mod printable;
 mod progress;

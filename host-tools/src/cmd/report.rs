@@ -1,9 +1,17 @@
-//! `tcomp report --model MODEL [--model MODEL2 ...] --data FILE --out report.html`: one
-//! self-contained HTML file with SVG plots, the diagnosis of the first model, and the figures.
+//! `tcomp report --model MODEL [--model MODEL2 ...] --data FILE [--verify FILE] --out report.html`:
+//! one self-contained HTML file with SVG plots, the diagnosis of the first model, and the figures.
+//!
+//! The plots are on the held-out run when there is one (`--verify`, or the `--from/--until`
+//! window of `--data`): that is where a base model fails and what the diagnosis is about; on the
+//! training run the base model already fits and the candidate plots are flat clouds.
+use super::json::{self, RunFigures, Subject};
 use super::run::RunArgs;
-use crate::render::html::{ModelRun, ReportInput, render};
+use crate::render::html::{ModelRun, ReportInput, View, render_with};
 use clap::Args as ClapArgs;
+use serde::Serialize;
 use std::path::PathBuf;
+use tcomp_discover::Analysis;
+use tcomp_train::Dataset;
 
 /// Arguments of `tcomp report`.
 #[derive(ClapArgs, Debug)]
@@ -11,10 +19,10 @@ pub struct Args {
     /// Model blobs (the first is diagnosed; others are compared with it).
     #[arg(long, required = true)]
     pub model: Vec<PathBuf>,
-    /// The run to show.
+    /// The run to diagnose (and to plot, without --verify).
     #[command(flatten)]
     pub run: RunArgs,
-    /// A held-out run for the diagnosis.
+    /// A held-out run: the diagnosis holds it out, and the plots show the models on it.
     #[arg(long)]
     pub verify: Option<PathBuf>,
     /// Output HTML file.
@@ -23,18 +31,87 @@ pub struct Args {
     /// Skip the diagnosis (plots and figures only).
     #[arg(long)]
     pub no_diagnosis: bool,
+    /// Print JSON (the file written, the verdict, each model's figures on the plotted run).
+    #[arg(long)]
+    pub json: bool,
+    /// No progress display and no summary lines.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
-/// Runs the command.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+/// One model's figures on the plotted run.
+#[derive(Serialize)]
+struct ModelFigures {
+    name: String,
+    figures: RunFigures,
+}
+
+/// The JSON of `tcomp report`.
+#[derive(Serialize)]
+struct Written {
+    out: String,
+    plotted: String,
+    verdict: Option<tcomp_discover::Verdict>,
+    verdict_text: Option<String>,
+    models: Vec<ModelFigures>,
+    plots: usize,
+    plots_without_data: usize,
+}
+
+/// Refuses an `--out` that is one of the inputs, before anything is read.
+fn check_output(args: &Args) -> anyhow::Result<()> {
     super::output::check_file_output("--out", &args.out)?;
-    let data_path = args.run.data.as_path();
-    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", data_path)];
+    let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", args.run.data.as_path())];
     inputs.extend(args.model.iter().map(|m| ("--model", m.as_path())));
     if let Some(v) = &args.verify {
         inputs.push(("--verify", v.as_path()));
     }
-    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
+    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)
+}
+
+/// The diagnosis of the first model, unless `--no-diagnosis`.
+fn diagnose(
+    args: &Args,
+    first: &std::path::Path,
+    temp: Option<&str>,
+) -> anyhow::Result<Option<Analysis>> {
+    if args.no_diagnosis {
+        return Ok(None);
+    }
+    let d = super::diagnose::Args {
+        model: first.to_path_buf(),
+        run: args.run.clone(),
+        verify: args.verify.clone(),
+        temperature: temp.map(str::to_string),
+        bin: 60.0,
+        min_evidence: 5.0,
+        min_improvement: 5.0,
+        top: 10,
+        json: false,
+        quiet: args.quiet,
+    };
+    Ok(Some(super::diagnose::analyse(&d)?.0))
+}
+
+/// Each model run over the plotted run.
+fn model_runs(args: &Args, shown: &Dataset, temp: Option<&str>) -> anyhow::Result<Vec<ModelRun>> {
+    args.model
+        .iter()
+        .map(|p| {
+            Ok(ModelRun {
+                name: p
+                    .file_name()
+                    .map_or_else(|| p.display().to_string(), |f| f.to_string_lossy().into()),
+                run: super::compare::run_blob(p, shown, temp, &args.run)?,
+            })
+        })
+        .collect()
+}
+
+/// Runs the command.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    check_output(args)?;
+    let data_path = args.run.data.as_path();
     let first = args
         .model
         .first()
@@ -44,43 +121,81 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let m0 = tcomp_train::blob_io::decode(first, &bytes)?;
     let temp = m0.program.inputs.first().map(|s| s.to_string());
     let data = args.run.load(m0.meta.columns.time)?;
-    let analysis = if args.no_diagnosis {
-        None
-    } else {
-        let d = super::diagnose::Args {
-            model: first.clone(),
-            run: args.run.clone(),
-            verify: args.verify.clone(),
-            temperature: temp.clone(),
-            bin: 60.0,
-            min_evidence: 5.0,
-            min_improvement: 5.0,
-            top: 10,
-            json: false,
-        };
-        Some(super::diagnose::analyse(&d)?.0)
+    let analysis = diagnose(args, first, temp.as_deref())?;
+    let verify = args.verify.as_deref().map(Dataset::load).transpose()?;
+    let (shown, plotted) = match (&verify, &args.verify) {
+        (Some(v), Some(p)) => (v, format!("held-out run {}", p.display())),
+        _ => (&data, format!("run {}", data_path.display())),
     };
-    let mut models = Vec::new();
-    for p in &args.model {
-        models.push(ModelRun {
-            name: p
-                .file_name()
-                .map_or_else(|| p.display().to_string(), |f| f.to_string_lossy().into()),
-            run: super::compare::run_blob(p, &data, temp.as_deref(), &args.run)?,
-        });
-    }
-    let html = render(&ReportInput {
-        title: format!("tcomp report: {}", data_path.display()),
-        data_name: data_path.display().to_string(),
-        unit: m0.meta.unit.to_string(),
-        models,
-        analysis: analysis.as_ref(),
-        noise_floor: None,
-    });
+    let models = model_runs(args, shown, temp.as_deref())?;
+    let roles = args.run.roles(&m0);
+    let mut subject = Subject::new(
+        args.model.iter().map(|m| m.display().to_string()).collect(),
+        &roles.target,
+        m0.meta.unit,
+        data_path,
+    );
+    subject.verify = args.verify.as_ref().map(|v| v.display().to_string());
+    let unit = subject.unit.clone().unwrap_or_default();
+    let figures: Vec<ModelFigures> = models
+        .iter()
+        .map(|m| ModelFigures {
+            name: m.name.clone(),
+            figures: RunFigures::from(&tcomp_train::metrics::report(&m.run, 100.0)),
+        })
+        .collect();
+    let view = View {
+        channel: Some(roles.target.clone()),
+        temperature: temp.clone(),
+        data: Some(shown),
+        time: Some(roles.time.clone()),
+        gap_s: args.run.run.gap,
+        run: Some(plotted.clone()),
+    };
+    let html = render_with(
+        &ReportInput {
+            title: format!(
+                "tcomp report: {}{}",
+                roles.target,
+                if unit.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({unit})")
+                }
+            ),
+            data_name: match &args.verify {
+                Some(v) => format!("{} (held out: {})", data_path.display(), v.display()),
+                None => data_path.display().to_string(),
+            },
+            unit,
+            models,
+            analysis: analysis.as_ref(),
+            noise_floor: None,
+        },
+        &view,
+    );
     tcomp_train::blob_io::write_atomic(&args.out, html.as_bytes())?;
-    outln!("wrote {}", args.out.display());
-    if let Some(a) = &analysis {
-        outln!("{}", a.diagnosis.verdict_text);
+    let plots = html.matches("<svg class=\"plot\"").count();
+    if args.json {
+        let written = Written {
+            out: args.out.display().to_string(),
+            plotted,
+            verdict: analysis.as_ref().map(|a| a.diagnosis.verdict),
+            verdict_text: analysis.as_ref().map(|a| a.diagnosis.verdict_text.clone()),
+            models: figures,
+            plots,
+            plots_without_data: html.matches("data-points=\"0\"").count(),
+        };
+        return json::print("report", &subject, &written);
+    }
+    if !args.quiet {
+        outln!(
+            "wrote {} ({plots} plots on the {plotted})",
+            args.out.display()
+        );
+        if let Some(a) = &analysis {
+            outln!("{}", a.diagnosis.verdict_text);
+        }
     }
     Ok(())
 }

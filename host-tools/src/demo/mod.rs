@@ -15,6 +15,8 @@ mod steps;
 
 use std::path::PathBuf;
 use tcomp_demo::Simulated;
+use tcomp_discover::Verdict;
+use tcomp_train::EvalReport;
 
 /// Options of the demo.
 #[derive(Clone, Debug)]
@@ -48,14 +50,45 @@ struct Scene {
     unit: String,
 }
 
+/// What the demo found, for `tcomp demo --json`.
+pub struct Summary {
+    /// The simulated sensor's output column.
+    pub target: String,
+    /// Its unit.
+    pub unit: String,
+    /// Noise floor of the verification run (100 s bins).
+    pub noise_floor: f64,
+    /// The traditional model on the verification run.
+    pub before: EvalReport,
+    /// The model with the effect the diagnosis named, on the verification run.
+    pub after: Option<EvalReport>,
+    /// The diagnosis of the traditional model.
+    pub verdict: Verdict,
+    /// The verdict in one sentence.
+    pub verdict_text: String,
+    /// The features added.
+    pub added: Vec<String>,
+}
+
 /// Runs the demo, writing data, blobs and the report into `opts.out`; `say` receives each
 /// paragraph of the narrative as it happens.
-pub fn run(opts: &DemoOptions, say: impl FnMut(&str)) -> anyhow::Result<()> {
+pub fn run(opts: &DemoOptions, say: impl FnMut(&str)) -> anyhow::Result<Summary> {
     let mut story = Story { say };
     files::create_dir(&opts.out)?;
     let scene = steps::simulate(opts, &mut story)?;
     let before = steps::fit_before(opts, &scene, &mut story)?;
     let analysis = steps::diagnose(&scene, &before, &mut story)?;
     let after = steps::add_effect(opts, &scene, &before, &analysis, &mut story)?;
-    steps::report(opts, &scene, &analysis, after.as_ref(), &mut story)
+    steps::report(opts, &scene, &analysis, after.as_ref(), &mut story)?;
+    let d = &analysis.diagnosis;
+    Ok(Summary {
+        target: scene.sim.verify_truth.columns.target.clone(),
+        unit: scene.unit.clone(),
+        noise_floor: scene.floor,
+        before: before.eval,
+        after: after.as_ref().map(|a| a.eval.clone()),
+        verdict: d.verdict,
+        verdict_text: d.verdict_text.clone(),
+        added: after.map(|a| a.added).unwrap_or_default(),
+    })
 }

@@ -5,6 +5,7 @@
 use super::{DemoOptions, Scene, Story, files};
 use crate::render::candidates::{Layout, table};
 use crate::render::html::{self, ModelRun, ReportInput};
+use crate::render::num::{change_pct, num, pct, plain};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use tcomp_discover::segments::SegmentRow;
@@ -19,13 +20,17 @@ pub(super) struct Before {
     fitted: Fitted,
     features: Vec<String>,
     path: PathBuf,
-    eval: EvalReport,
+    /// On the verification run.
+    pub(super) eval: EvalReport,
 }
 
 /// The model with the effect the diagnosis named.
 pub(super) struct After {
     fitted: Fitted,
-    added: Vec<String>,
+    /// The features added.
+    pub(super) added: Vec<String>,
+    /// On the verification run.
+    pub(super) eval: EvalReport,
 }
 
 /// Paragraph 1: simulates the demo's scenario and writes both runs as CSV.
@@ -72,12 +77,12 @@ pub(super) fn fit_before(
     let eval = tcomp_demo::evaluate(&fitted, &sim.verify)?;
     story.tell(&format!(
         "2. Fitting the traditional model on (T, dT/dt): --feature {temp} --feature '{rate}'.\n   \
-         Training residual (100 s bins): {:.4} {unit}. On the verification run: {:.4} {unit} — \
-         {:.1}× the noise floor of {:.4} {unit}.",
-        fitted.summary.train.binned.residual_std,
-        eval.binned.residual_std,
-        eval.binned.residual_std / floor,
-        floor
+         Training residual (100 s bins): {}. On the verification run: {} — {}× the noise \
+         floor of {}.",
+        num(fitted.summary.train.binned.residual_std, unit),
+        num(eval.binned.residual_std, unit),
+        plain(eval.binned.residual_std / floor, 3),
+        num(floor, unit)
     ));
     Ok(Before {
         fitted,
@@ -115,11 +120,11 @@ pub(super) fn diagnose(
         .take(2)
         .map(|s| {
             format!(
-                "{} ({:.0}–{:.0} min: {:.4} {unit})",
+                "{} ({}–{} min: {})",
                 s.label,
-                s.start_s / 60.0,
-                s.end_s / 60.0,
-                s.residual_std
+                plain(s.start_s / 60.0, 3),
+                plain(s.end_s / 60.0, 3),
+                num(s.residual_std, unit)
             )
         })
         .collect();
@@ -165,24 +170,27 @@ pub(super) fn add_effect(
     features.extend(added.iter().cloned());
     let fitted = tcomp_demo::fit_features(&sim.train, &sim.train_truth, &[], &features)?;
     tcomp_train::blob_io::write_atomic(&opts.out.join("after.tcm"), &fitted.model.to_bytes()?)?;
-    let (was, now) = (
-        before.eval.binned.residual_std,
-        tcomp_demo::evaluate(&fitted, &sim.verify)?
-            .binned
-            .residual_std,
-    );
+    let eval = tcomp_demo::evaluate(&fitted, &sim.verify)?;
+    let (was, now) = (before.eval.binned.residual_std, eval.binned.residual_std);
     story.tell(&format!(
         "5. Adding it is one line: tcomp fit ... {}\n   \
-         Verification residual (100 s bins): {was:.4} → {now:.4} {unit} ({:.1} % lower; noise floor {floor:.4}, now {:.2}×).",
+         Verification residual (100 s bins): {} → {} ({}; noise floor {}, now {}×).",
         added
             .iter()
             .map(|e| format!("--feature '{e}'"))
             .collect::<Vec<_>>()
             .join(" "),
-        100.0 * (1.0 - now / was),
-        now / floor
+        num(was, ""),
+        num(now, unit),
+        pct(change_pct(was, now)),
+        num(floor, unit),
+        plain(now / floor, 3)
     ));
-    Ok(Some(After { fitted, added }))
+    Ok(Some(After {
+        fitted,
+        added,
+        eval,
+    }))
 }
 
 /// Paragraph 6: writes the report: before (and after) on the verification run, with the diagnosis.
@@ -206,14 +214,29 @@ pub(super) fn report(
             run: tcomp_demo::run_fitted(&a.fitted, "after.tcm", &scene.sim.verify)?,
         });
     }
-    let page = html::render(&ReportInput {
-        title: "tcomp demo: IFOG with a Shupe-type term".into(),
-        data_name: "verify.csv (simulated verification run)".into(),
-        unit: scene.unit.clone(),
-        models,
-        analysis: Some(analysis),
-        noise_floor: Some(scene.floor),
-    });
+    let cols = &scene.sim.verify_truth.columns;
+    let view = html::View {
+        channel: Some(cols.target.clone()),
+        temperature: cols.thermometers.first().cloned(),
+        data: Some(&scene.sim.verify),
+        time: Some(cols.time.clone()),
+        gap_s: None,
+        run: Some("held-out verification run verify.csv".into()),
+    };
+    let page = html::render_with(
+        &ReportInput {
+            title: format!(
+                "tcomp demo: IFOG with a Shupe-type term — {} ({})",
+                cols.target, scene.unit
+            ),
+            data_name: "verify.csv (simulated verification run)".into(),
+            unit: scene.unit.clone(),
+            models,
+            analysis: Some(analysis),
+            noise_floor: Some(scene.floor),
+        },
+        &view,
+    );
     files::write(&opts.out.join("report.html"), page.as_bytes())?;
     story.tell(&format!(
         "6. Written to {}: train.csv, verify.csv, before.tcm{}, report.html (open it in a browser).",

@@ -4,8 +4,9 @@
 //! One function in two layouts: `diagnose` prints columns an engineer scans (with the expressions to
 //! paste), the demo prints a narrative line per candidate (before → after in the model's unit).
 //! Both take the same rows in the same order and mark a candidate that passes the criterion the
-//! same way.
+//! same way, and both write the held-out change the same way: negative when the residual fell.
 
+use super::num::{change_pct, num, pct};
 use std::fmt::Write as _;
 use tcomp_discover::score::Scored;
 
@@ -13,7 +14,10 @@ use tcomp_discover::score::Scored;
 #[derive(Clone, Copy, Debug)]
 pub enum Layout<'a> {
     /// A header and one row of columns per candidate, with its expressions (`tcomp diagnose`).
-    Columns,
+    Columns {
+        /// The model's output unit.
+        unit: &'a str,
+    },
     /// One indented sentence per candidate: held-out before → after in `unit` (`tcomp demo`).
     Narrative {
         /// The model's output unit.
@@ -23,25 +27,25 @@ pub enum Layout<'a> {
 
 /// Appends the first `top` candidates of `candidates` (best first) to `out`.
 pub fn table(out: &mut String, candidates: &[Scored], top: usize, layout: Layout<'_>) {
-    if let Layout::Columns = layout {
+    if let Layout::Columns { .. } = layout {
         let _ = writeln!(
             out,
-            "  {:<3}{:<58} {:>9} {:>12} {:>8}  {:<8} expression",
-            "", "effect", "Δ ln E", "held-out", "better", "from"
+            "  {:<3}{:<58} {:>9} {:>14} {:>9}  {:<8} expression",
+            "", "effect", "Δ ln E", "held-out", "change", "from"
         );
     }
     for c in candidates.iter().take(top) {
         let refitted = c.confirmation.is_some();
         match layout {
-            Layout::Columns => {
+            Layout::Columns { unit } => {
                 let _ = writeln!(
                     out,
-                    "  {:<3}{:<58} {:>+9.1} {:>12.4e} {:>7.1}%  {:<8} {}",
+                    "  {:<3}{:<58} {:>+9.1} {:>14} {:>9}  {:<8} {}",
                     if c.passes { "✔" } else { "" },
                     c.effect,
                     c.delta_log_evidence,
-                    c.residual_std_after,
-                    c.improvement_pct,
+                    num(c.residual_std_after, unit),
+                    pct(change_pct(c.residual_std_before, c.residual_std_after)),
                     if refitted { "refit" } else { "scoring" },
                     c.expressions.join(" ; ")
                 );
@@ -49,13 +53,13 @@ pub fn table(out: &mut String, candidates: &[Scored], top: usize, layout: Layout
             Layout::Narrative { unit } => {
                 let _ = writeln!(
                     out,
-                    "   {} {:<52} Δ log evidence {:+8.1}   held-out {:.4} → {:.4} {unit} ({:+.1} %){}",
+                    "   {} {:<52} Δ log evidence {:+8.1}   held-out {} → {} ({}){}",
                     if c.passes { "✔" } else { " " },
                     c.effect,
                     c.delta_log_evidence,
-                    c.residual_std_before,
-                    c.residual_std_after,
-                    -c.improvement_pct,
+                    num(c.residual_std_before, ""),
+                    num(c.residual_std_after, unit),
+                    pct(change_pct(c.residual_std_before, c.residual_std_after)),
                     if refitted {
                         ", refitted"
                     } else {

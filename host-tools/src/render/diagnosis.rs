@@ -2,6 +2,7 @@
 //! and on the verification run), the candidate table, the criterion and the verdict.
 
 use super::candidates::{Layout, table};
+use super::num::{num, plain, signed};
 use std::fmt::Write as _;
 use tcomp_discover::Analysis;
 use tcomp_discover::segments::{Interval, SegmentRow};
@@ -9,7 +10,7 @@ use tcomp_discover::segments::{Interval, SegmentRow};
 /// The human-readable diagnosis, with the first `top` candidates.
 pub fn text(a: &Analysis, top: usize) -> String {
     let d = &a.diagnosis;
-    let u = &d.model.unit;
+    let u = &super::num::unit_or_column(&d.model.unit, &d.model.target);
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -36,10 +37,12 @@ pub fn text(a: &Analysis, top: usize) -> String {
     );
     let _ = writeln!(
         s,
-        "  held-out residual of the model's features {:.4e} {u} (refitted by the trainer: {:.4e} {u}); noise floor estimate {:.4e} {u}",
-        b.heldout_residual_std, d.refit_residual_std_before, b.noise_floor_estimate
+        "  held-out residual of the model's features {} (refitted by the trainer: {}); noise floor estimate {}",
+        num(b.heldout_residual_std, u),
+        num(d.refit_residual_std_before, u),
+        num(b.noise_floor_estimate, u)
     );
-    table(&mut s, &d.candidates, top, Layout::Columns);
+    table(&mut s, &d.candidates, top, Layout::Columns { unit: u });
     for k in &d.skipped {
         let _ = writeln!(s, "  skipped {}: {}", k.expression, k.reason);
     }
@@ -52,22 +55,43 @@ pub fn text(a: &Analysis, top: usize) -> String {
 fn segments(s: &mut String, rows: &[SegmentRow], worst: &[Interval], unit: &str) {
     let _ = writeln!(
         s,
-        "  {:<24} {:>9} {:>9} {:>12} {:>12} {:>12}",
-        "segment", "start s", "end s", "raw std", "resid std", "resid mean"
+        "  {:<24} {:>15} {:>16} {:>16} {:>16}",
+        "segment", "when (min)", "raw std", "resid std", "resid mean"
     );
     for r in rows {
+        let when = if r.kind == "band" {
+            "spread".to_string()
+        } else {
+            format!(
+                "{}–{}",
+                plain(r.start_s / 60.0, 3),
+                plain(r.end_s / 60.0, 3)
+            )
+        };
         let _ = writeln!(
             s,
-            "  {:<24} {:>9.0} {:>9.0} {:>12.4e} {:>12.4e} {:>+12.4e}",
-            r.label, r.start_s, r.end_s, r.raw_std, r.residual_std, r.residual_mean
+            "  {:<24} {:>15} {:>16} {:>16} {:>16}",
+            r.label,
+            when,
+            num(r.raw_std, unit),
+            num(r.residual_std, unit),
+            num(r.residual_mean, unit)
         );
     }
     let _ = writeln!(s, "  worst intervals:");
     for w in worst {
         let _ = writeln!(
             s,
-            "    {:>7.0}–{:<7.0} s  mean residual {:+.4e} {unit}  at {:.1}° {:+.2}°/min  {}",
-            w.start_s, w.end_s, w.residual_mean, w.temperature, w.rate_per_min, w.during
+            "    {:>16}  mean residual {}  at {}° {}°/min  {}",
+            format!(
+                "{}–{} min",
+                plain(w.start_s / 60.0, 3),
+                plain(w.end_s / 60.0, 3)
+            ),
+            num(w.residual_mean, unit),
+            plain(w.temperature, 3),
+            signed(w.rate_per_min, 2),
+            w.during
         );
     }
 }

@@ -10,3 +10,4 @@
 pub mod candidates;
 pub mod diagnosis;
 pub mod html;
+pub mod num;

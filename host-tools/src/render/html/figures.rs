@@ -1,20 +1,40 @@
-//! The report's figures, each one SVG plot: error and model over time, residual against
-//! temperature (heating and cooling told apart), residual against the leading candidates, and
-//! residual per segment for each model.
+//! The report's figures, each one SVG plot of the run the report shows (the held-out run when
+//! there is one, where the base model fails): error and models over time, residual against
+//! temperature for each model side by side (heating and cooling told apart), residual of each
+//! model against the leading candidates, and residual per segment for each model.
+//!
+//! Everything is binned first ([`plot_bins`]): a 1 Hz residual is mostly noise, and a bursty
+//! record (a few seconds of samples every few minutes) has no 60 s bin with enough samples, so
+//! the bin adapts until the run gives enough bins. Axes carry units: the model's unit, else the
+//! one the target column's name carries; the temperature's from its column name.
 
-use super::ModelRun;
 use super::ReportInput;
-use super::plot::{COLORS, H, MB, ML, MR, Plot, W, esc, range};
-use std::fmt::Write as _;
+use super::bars::{BarSeries, bars};
+use super::plot::{COLORS, Plot, range};
+use super::{ModelRun, View};
 use tcomp_discover::segments::SegmentRow;
 use tcomp_discover::{Analysis, score};
-use tcomp_train::features::{bin_mean, bins};
+use tcomp_train::features::{FeatureSpec, adaptive_bin, bin_mean, bins};
 use tcomp_train::metrics::{self, Run};
 
-/// Binned (60 s) time in minutes, error, residual and temperature of a run.
+/// Bins a plot aims for over a run.
+const PLOT_BINS: f64 = 600.0;
+/// Fewest bins a plot accepts before it shortens its bin.
+const MIN_PLOT_BINS: usize = 20;
+/// Width of a plot shown beside another (px).
+const HALF_W: u32 = 430;
+
+/// The bins of a plot over `time`: about [`PLOT_BINS`] bins of at least 60 s, shortened until a
+/// bursty record still gives [`MIN_PLOT_BINS`].
+pub(super) fn plot_bins(time: &[f64]) -> Vec<(usize, usize)> {
+    let span = time.last().copied().unwrap_or(0.0) - time.first().copied().unwrap_or(0.0);
+    let wanted = (span / PLOT_BINS).max(60.0);
+    bins(time, adaptive_bin(time, wanted, MIN_PLOT_BINS))
+}
+
+/// Binned time in minutes, error, residual and temperature of a run.
 fn binned(run: &Run) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
-    let span = run.time.last().copied().unwrap_or(0.0) - run.time.first().copied().unwrap_or(0.0);
-    let b = bins(&run.time, (span / 600.0).max(60.0));
+    let b = plot_bins(&run.time);
     let t: Vec<f64> = bin_mean(&run.time, &b).iter().map(|v| v / 60.0).collect();
     (
         t,
@@ -28,8 +48,33 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
+fn model_color(k: usize) -> &'static str {
+    COLORS.get(k % COLORS.len()).copied().unwrap_or("#d62728")
+}
+
+/// `label (unit)`, or the label alone when the unit is unknown.
+fn axis(label: &str, unit: &str) -> String {
+    if unit.is_empty() {
+        label.to_string()
+    } else {
+        format!("{label} ({unit})")
+    }
+}
+
+/// The measured error and each model over time (the page's first plot), with the defaults of
+/// [`View`].
+#[allow(
+    dead_code,
+    reason = "the figure API other report pages (calibrate) call"
+)]
 pub(super) fn time_plot(input: &ReportInput<'_>) -> Option<String> {
+    time_plot_in(input, &View::default())
+}
+
+/// The measured error and each model over time, temperature on the right axis.
+pub(super) fn time_plot_in(input: &ReportInput<'_>, view: &View<'_>) -> Option<String> {
     let first = input.models.first()?;
+    let unit = view.unit(input);
     let (t, e, _, temp) = binned(&first.run);
     let em = mean(&e);
     let ec: Vec<f64> = e.iter().map(|v| v - em).collect();
@@ -42,23 +87,19 @@ pub(super) fn time_plot(input: &ReportInput<'_>) -> Option<String> {
         curves.push((m.name.clone(), f));
     }
     let mut p = Plot::new(
-        "Measured error and model over time",
+        &format!(
+            "{}: measured error and model over time",
+            view.subject(input)
+        ),
         "time (min)",
-        &format!("error − mean ({})", input.unit),
+        &axis("error − mean", &unit),
         range(&t),
         range(&all),
     );
-    p.right_axis("temperature (°C)", range(&temp));
-    p.line(&t, &ec, "#000", "measured error", false, false);
+    p.right_axis(&axis("temperature", &view.temperature_unit()), range(&temp));
+    p.line(&t, &ec, "#000000", "measured error", false, false);
     for (k, (name, f)) in curves.iter().enumerate() {
-        p.line(
-            &t,
-            f,
-            COLORS.get(k % COLORS.len()).copied().unwrap_or("#d62728"),
-            &format!("model {name}"),
-            false,
-            true,
-        );
+        p.line(&t, f, model_color(k), &format!("model {name}"), false, true);
     }
     p.line(
         &t,
@@ -93,16 +134,35 @@ fn rate_colors(t_min: &[f64], temp: &[f64]) -> Vec<&'static str> {
         .collect()
 }
 
+/// One model's residual against temperature, in `unit`, full width.
+#[allow(
+    dead_code,
+    reason = "the figure API other report pages (calibrate) call"
+)]
 pub(super) fn temp_plot(m: &ModelRun, unit: &str) -> String {
+    let (_, _, r, _) = binned(&m.run);
+    temp_plot_sized(m, unit, "°C", range(&r), None)
+}
+
+fn temp_plot_sized(
+    m: &ModelRun,
+    unit: &str,
+    temp_unit: &str,
+    y: (f64, f64),
+    width: Option<u32>,
+) -> String {
     let (t, _, r, temp) = binned(&m.run);
     let colors = rate_colors(&t, &temp);
     let mut p = Plot::new(
         &format!("Residual against temperature — {}", m.name),
-        "temperature (°C)",
-        &format!("residual ({unit})"),
+        &axis("temperature", temp_unit),
+        &axis("residual", unit),
         range(&temp),
-        range(&r),
+        y,
     );
+    if let Some(w) = width {
+        p = p.width(w);
+    }
     p.dots(&temp, &r, &colors);
     p.legend.push(("heating".into(), "#d62728".into()));
     p.legend.push(("cooling".into(), "#1f77b4".into()));
@@ -110,6 +170,20 @@ pub(super) fn temp_plot(m: &ModelRun, unit: &str) -> String {
     p.finish()
 }
 
+/// Each model's residual against temperature, side by side on one residual scale.
+pub(super) fn temp_plots_in(input: &ReportInput<'_>, view: &View<'_>) -> Vec<String> {
+    let unit = view.unit(input);
+    let all: Vec<f64> = input.models.iter().flat_map(|m| binned(&m.run).2).collect();
+    let width = (input.models.len() > 1).then_some(HALF_W);
+    input
+        .models
+        .iter()
+        .map(|m| temp_plot_sized(m, &unit, &view.temperature_unit(), range(&all), width))
+        .collect()
+}
+
+/// Residual against the leading candidates, on the training run's binned scoring state (what
+/// `render` shows without a [`View`] of the shown run).
 pub(super) fn candidate_plots(a: &Analysis, unit: &str) -> Vec<String> {
     let res = score::base_residual(&a.prepared);
     a.diagnosis
@@ -119,9 +193,9 @@ pub(super) fn candidate_plots(a: &Analysis, unit: &str) -> Vec<String> {
         .filter_map(|c| {
             let x = score::binned_feature(&a.prepared, &c.expression).ok()?;
             let mut p = Plot::new(
-                &format!("Residual against candidate: {}", c.effect),
+                &format!("Residual against candidate: {} (training run)", c.effect),
                 &c.expression,
-                &format!("residual of the model's features ({unit})"),
+                &axis("residual of the model's features", unit),
                 range(&x),
                 range(&res),
             );
@@ -131,91 +205,135 @@ pub(super) fn candidate_plots(a: &Analysis, unit: &str) -> Vec<String> {
         .collect()
 }
 
+/// Each model's residual on the shown run against the leading candidates' values on the same
+/// run (binned alike): where the base model fails, its residual follows the missing effect; the
+/// model that has it is flat. Falls back to [`candidate_plots`] without the shown run's data.
+pub(super) fn candidate_plots_in(
+    a: &Analysis,
+    input: &ReportInput<'_>,
+    view: &View<'_>,
+) -> Vec<String> {
+    let unit = view.unit(input);
+    let (Some(data), Some(time_col), Some(first)) =
+        (view.data, view.time.as_deref(), input.models.first())
+    else {
+        return candidate_plots(a, &unit);
+    };
+    let Ok(time) = data.time(time_col) else {
+        return candidate_plots(a, &unit);
+    };
+    if time.len() != first.run.time.len() {
+        return candidate_plots(a, &unit);
+    }
+    let b = plot_bins(time);
+    let starts = tcomp_train::dataset::segments(time, view.gap_s);
+    let residuals: Vec<(String, Vec<f64>)> = input
+        .models
+        .iter()
+        .filter(|m| m.run.residual.len() == time.len())
+        .map(|m| (m.name.clone(), bin_mean(&m.run.residual, &b)))
+        .collect();
+    let all: Vec<f64> = residuals
+        .iter()
+        .flat_map(|(_, r)| r.iter().copied())
+        .collect();
+    a.diagnosis
+        .candidates
+        .iter()
+        .take(3)
+        .filter_map(|c| {
+            let spec = FeatureSpec {
+                signals: a.diagnosis.model.signals.clone(),
+                features: vec![c.expression.clone()],
+            };
+            let program = spec.program().ok()?;
+            let rows = tcomp_train::features::compute(&program, data, time, &starts).ok()?;
+            let col: Vec<f64> = rows
+                .iter()
+                .map(|r| r.first().copied().map_or(f64::NAN, f64::from))
+                .collect();
+            let x = bin_mean(&col, &b);
+            let mut p = Plot::new(
+                &format!(
+                    "Residual against candidate: {} — {}",
+                    c.effect,
+                    view.run_label()
+                ),
+                &c.expression,
+                &axis("residual", &unit),
+                range(&x),
+                range(&all),
+            );
+            for (k, (name, r)) in residuals.iter().enumerate() {
+                let color = if k == 0 { "#ff7f0e" } else { model_color(k) };
+                p.dots(&x, r, &[color]);
+                p.legend.push((name.clone(), color.into()));
+            }
+            Some(p.finish())
+        })
+        .collect()
+}
+
+/// Row range of segment `s` in `run`.
+fn rows_of(run: &Run, s: &SegmentRow) -> (usize, usize) {
+    let a = run.time.partition_point(|&x| x < s.start_s);
+    let b = run.time.partition_point(|&x| x <= s.end_s);
+    (a, b)
+}
+
+/// Raw error std and each model's residual std per segment (bands left out: they are not spans
+/// of time), as horizontal bars labelled by segment.
+#[allow(
+    dead_code,
+    reason = "the figure API other report pages (calibrate) call"
+)]
 pub(super) fn segment_bars(input: &ReportInput<'_>, segs: &[SegmentRow]) -> Option<String> {
+    segment_bars_in(input, segs, &View::default())
+}
+
+/// [`segment_bars`] with the units of `view`.
+pub(super) fn segment_bars_in(
+    input: &ReportInput<'_>,
+    segs: &[SegmentRow],
+    view: &View<'_>,
+) -> Option<String> {
     let first = input.models.first()?;
     let rows: Vec<&SegmentRow> = segs.iter().filter(|s| s.kind != "band").collect();
     if rows.is_empty() {
         return None;
     }
-    let idx = |run: &Run, s: &SegmentRow| {
-        let a = run.time.partition_point(|&x| x < s.start_s);
-        let b = run.time.partition_point(|&x| x <= s.end_s);
-        (a, b)
-    };
-    let vals: Vec<Vec<f64>> = input
-        .models
-        .iter()
-        .map(|m| {
-            rows.iter()
-                .map(|s| {
-                    let (a, b) = idx(&m.run, s);
-                    metrics::std(m.run.residual.get(a..b).unwrap_or(&[]))
-                })
-                .collect()
-        })
-        .collect();
-    let raw: Vec<f64> = rows
-        .iter()
-        .map(|s| {
-            let (a, b) = idx(&first.run, s);
-            metrics::std(first.run.error.get(a..b).unwrap_or(&[]))
-        })
-        .collect();
-    let top = vals
-        .iter()
-        .flatten()
-        .chain(raw.iter())
-        .fold(0.0f64, |m, v| m.max(*v))
-        .max(1e-300)
-        * 1.1;
-    let mut p = Plot::new(
-        "Residual std per segment (raw error in grey)",
-        "segment",
-        &format!("std ({})", input.unit),
-        (0.0, rows.len() as f64),
-        (0.0, top),
-    );
-    let nb = vals.len() + 1;
-    let slot = (W - ML - MR) / rows.len() as f64;
-    let bw = 0.8 * slot / nb as f64;
-    for (k, s) in rows.iter().enumerate() {
-        let x0 = ML + slot * k as f64 + 0.1 * slot;
-        let series = std::iter::once((raw.get(k).copied().unwrap_or(0.0), "#bbbbbb")).chain(
-            vals.iter().enumerate().map(|(j, v)| {
-                (
-                    v.get(k).copied().unwrap_or(0.0),
-                    COLORS.get(j % COLORS.len()).copied().unwrap_or("#d62728"),
-                )
-            }),
-        );
-        for (j, (v, c)) in series.enumerate() {
-            let y = p.py(v);
-            let _ = writeln!(
-                p.svg,
-                "<rect x=\"{:.1}\" y=\"{y:.1}\" width=\"{bw:.1}\" height=\"{:.1}\" fill=\"{c}\"><title>{}: {v:.4e}</title></rect>",
-                x0 + bw * j as f64,
-                (H - MB - y).max(0.0),
-                esc(&s.label)
-            );
+    let std_of = |v: &[f64], run: &Run, s: &SegmentRow| {
+        let (a, b) = rows_of(run, s);
+        let part = v.get(a..b).unwrap_or(&[]);
+        if part.is_empty() {
+            f64::NAN
+        } else {
+            metrics::std(part)
         }
-        let _ = writeln!(
-            p.svg,
-            "<text x=\"{:.1}\" y=\"{}\" text-anchor=\"middle\" font-size=\"9\">{}</text>",
-            x0 + 0.4 * slot,
-            H - MB + 28.0,
-            esc(&s.label.chars().take(18).collect::<String>())
-        );
-    }
-    p.legend.push(("raw error".into(), "#bbbbbb".into()));
+    };
+    let mut series = vec![BarSeries {
+        name: "raw error".into(),
+        color: "#bbbbbb".into(),
+        values: rows
+            .iter()
+            .map(|s| std_of(&first.run.error, &first.run, s))
+            .collect(),
+    }];
     for (j, m) in input.models.iter().enumerate() {
-        p.legend.push((
-            m.name.clone(),
-            COLORS
-                .get(j % COLORS.len())
-                .copied()
-                .unwrap_or("#d62728")
-                .into(),
-        ));
+        series.push(BarSeries {
+            name: m.name.clone(),
+            color: model_color(j).into(),
+            values: rows
+                .iter()
+                .map(|s| std_of(&m.run.residual, &m.run, s))
+                .collect(),
+        });
     }
-    Some(p.finish())
+    let categories: Vec<String> = rows.iter().map(|s| s.label.clone()).collect();
+    Some(bars(
+        &format!("{}: residual std per segment", view.subject(input)),
+        &axis("std", &view.unit(input)),
+        &categories,
+        &series,
+    ))
 }

@@ -3,20 +3,30 @@
 //! temperature with heating and cooling told apart, residual against the top candidates, residual
 //! per segment for each model (before/after bars), and the verdict and figures as text.
 //!
-//! Layout: this module writes the page and its tables, [`figures`] the plots, [`plot`] the SVG
-//! plot area they share (and why it is hand-written SVG). A short inline script only checks that
-//! every plot has laid out (non-empty bounding box) and records the count on `<body data-plots=…>`,
-//! which the headless-Chromium test (`host-tools/tests/report_chromium.rs`) reads back.
+//! The plots show the run the models were run over ([`ReportInput::models`]): the caller passes the
+//! held-out run there when it has one, since that is where a base model fails and where the
+//! diagnosis looks; [`View`] names that run, its channel and its data, so the candidate plots are
+//! drawn on it too. Every number goes through [`crate::render::num`] (plain notation, unit
+//! appended; a change is negative when the residual fell).
+//!
+//! Layout: this module writes the page and its tables, [`figures`] the plots, [`plot`] the plot
+//! areas (plotters' SVG backend), [`bars`] the segment chart. A short inline script only checks that every plot has laid out
+//! (non-empty bounding box) and holds data, and records the counts on `<body data-plots=…
+//! data-plots-ok=…>`, which the headless-Chromium test (`host-tools/tests/report_chromium.rs`)
+//! reads back.
 
+mod bars;
 mod figures;
 mod plot;
+mod tables;
 
-use figures::{candidate_plots, segment_bars, temp_plot, time_plot};
+use crate::render::num;
 use plot::esc;
 use std::fmt::Write as _;
-use tcomp_discover::segments::{self, SegmentRow};
-use tcomp_discover::{Analysis, Verdict};
-use tcomp_train::metrics::{self, Run};
+use tcomp_discover::Analysis;
+use tcomp_discover::segments;
+use tcomp_train::Dataset;
+use tcomp_train::metrics::Run;
 
 /// One model's run over the report's data.
 #[derive(Clone, Debug)]
@@ -33,9 +43,9 @@ pub struct ReportInput<'a> {
     pub title: String,
     /// Name of the data file.
     pub data_name: String,
-    /// Output unit.
+    /// Output unit (empty: the one the channel's column name carries).
     pub unit: String,
-    /// Models (the first defines the segments).
+    /// Models (the first defines the segments), each run over the run the report shows.
     pub models: Vec<ModelRun>,
     /// A diagnosis of the first model, when available.
     pub analysis: Option<&'a Analysis>,
@@ -43,14 +53,84 @@ pub struct ReportInput<'a> {
     pub noise_floor: Option<f64>,
 }
 
+/// What the report knows about the run it shows, beyond [`ReportInput`]; every field may be left
+/// at its default (`View::default()`), and the report then says less.
+#[derive(Clone, Debug, Default)]
+pub struct View<'a> {
+    /// The channel: the target column (default: the diagnosis' target).
+    pub channel: Option<String>,
+    /// The temperature column (its name gives the temperature unit; default °C).
+    pub temperature: Option<String>,
+    /// The data the models were run over (the candidate plots compute candidates on it).
+    pub data: Option<&'a Dataset>,
+    /// Its time column.
+    pub time: Option<String>,
+    /// Gap threshold (s) at which feature state is reset, as in the models' runs.
+    pub gap_s: Option<f64>,
+    /// What the run is, e.g. "held-out run verify.csv".
+    pub run: Option<String>,
+}
+
+impl View<'_> {
+    /// The channel's name: the view's, else the diagnosis' target, else "run".
+    fn subject(&self, input: &ReportInput<'_>) -> String {
+        self.channel
+            .clone()
+            .or_else(|| input.analysis.map(|a| a.diagnosis.model.target.clone()))
+            .filter(|c| !c.is_empty())
+            .unwrap_or_else(|| "run".into())
+    }
+
+    /// The output unit: the input's, else the one the channel's column name carries.
+    fn unit(&self, input: &ReportInput<'_>) -> String {
+        num::unit_or_column(&input.unit, &self.subject(input))
+    }
+
+    /// The temperature unit, from the temperature column's name (°C when it carries none).
+    fn temperature_unit(&self) -> String {
+        self.temperature
+            .as_deref()
+            .and_then(num::unit_of_column)
+            .unwrap_or("°C")
+            .to_string()
+    }
+
+    /// What the shown run is.
+    fn run_label(&self) -> String {
+        self.run.clone().unwrap_or_else(|| "the run shown".into())
+    }
+}
+
 /// Renders the report: the page, its tables, and the plots of [`figures`].
+#[allow(
+    dead_code,
+    reason = "the entry point of callers without a view (calibrate)"
+)]
 pub fn render(input: &ReportInput<'_>) -> String {
+    render_with(input, &View::default())
+}
+
+/// [`render`] with what `view` says about the run shown (its channel, units and data).
+pub fn render_with(input: &ReportInput<'_>, view: &View<'_>) -> String {
+    let unit = view.unit(input);
+    let subject = view.subject(input);
     let mut h = String::new();
     let _ = write!(
         h,
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\n<style>body{{font-family:sans-serif;max-width:900px;margin:1em auto;color:#222}}table{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}td:first-child,th:first-child{{text-align:left}}.verdict{{font-size:16px;padding:8px;background:#f4f4e8;border-left:4px solid #c90}}svg{{display:block;margin:10px 0}}</style></head>\n<body>\n<h1>{t}</h1>\n<p>Data: {d}</p>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\n<style>body{{font-family:sans-serif;max-width:900px;margin:1em auto;color:#222}}.scroll{{overflow-x:auto;margin:8px 0 18px}}table{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}}td:first-child,th:first-child{{text-align:left}}.verdict{{font-size:16px;padding:8px;background:#f4f4e8;border-left:4px solid #c90}}.row{{display:flex;gap:0}}svg{{display:block;margin:10px 0}}</style></head>\n<body>\n<h1>{t}</h1>\n<p>Channel: <b>{c}</b>{u}. Data: {d}{r}</p>\n",
         t = esc(&input.title),
-        d = esc(&input.data_name)
+        c = esc(&subject),
+        u = if unit.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", esc(&unit))
+        },
+        d = esc(&input.data_name),
+        r = view
+            .run
+            .as_deref()
+            .map(|r| format!("; plots on the {}", esc(r)))
+            .unwrap_or_default(),
     );
     let segs = input
         .models
@@ -58,103 +138,27 @@ pub fn render(input: &ReportInput<'_>) -> String {
         .map(|m| segments::table(&m.run))
         .unwrap_or_default();
     if let Some(a) = input.analysis {
-        verdict(&mut h, input, a);
+        tables::verdict(&mut h, a, &unit, input.noise_floor);
     }
-    h.push_str("<h2>Figures</h2>\n<table><tr><th>model</th><th>raw std</th><th>residual std</th><th>100 s bins: residual std</th><th>improvement %</th></tr>\n");
-    for m in &input.models {
-        let r = metrics::report(&m.run, 100.0);
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td>{:.4e}</td><td>{:.4e}</td><td>{:.4e}</td><td>{:.1}</td></tr>",
-            esc(&m.name),
-            r.raw_std,
-            r.residual_std,
-            r.binned.residual_std,
-            r.binned.improvement_pct
-        );
-    }
-    h.push_str("</table>\n<h2>Plots</h2>\n");
-    if let Some(s) = time_plot(input) {
+    tables::figures(&mut h, input, &unit);
+    h.push_str("<h2>Plots</h2>\n");
+    if let Some(s) = figures::time_plot_in(input, view) {
         h.push_str(&s);
     }
-    for m in &input.models {
-        h.push_str(&temp_plot(m, &input.unit));
+    h.push_str("<div class=\"row\">\n");
+    for s in figures::temp_plots_in(input, view) {
+        h.push_str(&s);
     }
+    h.push_str("</div>\n");
     if let Some(a) = input.analysis {
-        for s in candidate_plots(a, &input.unit) {
+        for s in figures::candidate_plots_in(a, input, view) {
             h.push_str(&s);
         }
     }
-    if let Some(s) = segment_bars(input, &segs) {
+    if let Some(s) = figures::segment_bars_in(input, &segs, view) {
         h.push_str(&s);
     }
-    segment_table(&mut h, input, &segs);
-    h.push_str("<script>(function(){var s=document.querySelectorAll('svg.plot'),ok=0;for(var i=0;i<s.length;i++){var b=s[i].getBBox();if(b.width>0&&b.height>0&&s[i].querySelectorAll('polyline,circle,rect').length>1)ok++;}document.body.setAttribute('data-plots',String(s.length));document.body.setAttribute('data-plots-ok',String(ok));})();</script>\n</body></html>\n");
+    tables::segments(&mut h, input, &segs, &unit, &view.temperature_unit());
+    h.push_str("<script>(function(){var s=document.querySelectorAll('svg.plot'),ok=0;for(var i=0;i<s.length;i++){var b=s[i].getBBox();if(b.width>0&&b.height>0&&Number(s[i].getAttribute('data-points'))>0)ok++;}document.body.setAttribute('data-plots',String(s.length));document.body.setAttribute('data-plots-ok',String(ok));})();</script>\n</body></html>\n");
     h
-}
-
-/// The verdict, the criterion and the candidate table of the first model's diagnosis.
-fn verdict(h: &mut String, input: &ReportInput<'_>, a: &Analysis) {
-    let d = &a.diagnosis;
-    let _ = write!(
-        h,
-        "<h2>Verdict</h2>\n<p class=\"verdict\" id=\"verdict\" data-verdict=\"{}\">{}</p>\n<p><small>Criterion: {}. Held-out: {}; noise floor estimate {:.4e} {u}{}.</small></p>\n",
-        match d.verdict {
-            Verdict::MissingEffect => "missing_effect",
-            Verdict::None => "none",
-        },
-        esc(&d.verdict_text),
-        esc(&d.criterion),
-        esc(&d.base.heldout),
-        d.base.noise_floor_estimate,
-        input
-            .noise_floor
-            .map(|f| format!(" (true noise floor {f:.4e})"))
-            .unwrap_or_default(),
-        u = esc(&input.unit)
-    );
-    h.push_str("<h2>Candidates</h2>\n<table><tr><th>effect</th><th>expression</th><th>Δ log evidence</th><th>held-out after</th><th>improvement %</th><th>passes</th></tr>\n");
-    for c in d.candidates.iter().take(12) {
-        let _ = writeln!(
-            h,
-            "<tr><td>{}</td><td><code>{}</code></td><td>{:+.1}</td><td>{:.4e}</td><td>{:.1}</td><td>{}</td></tr>",
-            esc(&c.effect),
-            esc(&c.expressions.join(" ; ")),
-            c.delta_log_evidence,
-            c.residual_std_after,
-            c.improvement_pct,
-            if c.passes { "yes" } else { "no" }
-        );
-    }
-    h.push_str("</table>\n");
-}
-
-/// Each segment of the first model's run: raw error and every model's residual std.
-fn segment_table(h: &mut String, input: &ReportInput<'_>, segs: &[SegmentRow]) {
-    h.push_str("<h2>Segments</h2>\n<table><tr><th>segment</th><th>start s</th><th>end s</th><th>raw std</th>");
-    for m in &input.models {
-        let _ = write!(h, "<th>{}</th>", esc(&m.name));
-    }
-    h.push_str("</tr>\n");
-    let per_model: Vec<Vec<SegmentRow>> = input
-        .models
-        .iter()
-        .map(|m| segments::table(&m.run))
-        .collect();
-    for (k, s) in segs.iter().enumerate() {
-        let _ = write!(
-            h,
-            "<tr><td>{}</td><td>{:.0}</td><td>{:.0}</td><td>{:.4e}</td>",
-            esc(&s.label),
-            s.start_s,
-            s.end_s,
-            s.raw_std
-        );
-        for pm in &per_model {
-            let v = pm.get(k).map_or(f64::NAN, |r| r.residual_std);
-            let _ = write!(h, "<td>{v:.4e}</td>");
-        }
-        h.push_str("</tr>\n");
-    }
-    h.push_str("</table>\n");
 }

@@ -1,20 +1,28 @@
-//! The SVG plot area of the report: axes with ticks, an optional right axis, lines, dots and a
-//! legend, written as SVG text.
+//! The report's plot areas, drawn with `plotters`' SVG backend: a [`Plot`] (numeric axes, an
+//! optional right axis, lines and dots, a legend); [`super::bars`] draws the categorical one.
 //!
-//! Why hand-written: the plots are simple (lines, dots, bars), the file must open anywhere without
-//! fonts or scripts fetched, and a few hundred lines of SVG text are easier to check in a headless
-//! browser than a plotting stack (`plotters` returns with the rewrite of the report's plots).
+//! Why plotters: the hand-written SVG this replaces put numeric ticks on categories, cut long
+//! labels and had its own tick formatting. plotters lays out axes, ticks and legends; its SVG
+//! backend writes text as `<text>` elements, so no font file is read and the page opens anywhere
+//! (the default features — bitmap backends, system fonts — are off). Tick labels go through the
+//! report's one number formatter ([`crate::render::num`]).
+//!
+//! Every plot's `<svg>` carries `class="plot"` and `data-points` (the marks drawn from data): the
+//! page's inline check and the headless-Chromium test count plots that are laid out *and* hold
+//! data, so an empty plot fails the test instead of passing as an empty frame.
 
+use crate::render::num;
+use plotters::prelude::*;
 use std::fmt::Write as _;
 
+/// Series colours, in order.
 pub(super) const COLORS: [&str; 4] = ["#d62728", "#2ca02c", "#9467bd", "#8c564b"];
+/// Width of a full-width plot (px).
 pub(super) const W: f64 = 860.0;
+/// Height of a plot (px).
 pub(super) const H: f64 = 300.0;
-pub(super) const ML: f64 = 70.0;
-pub(super) const MR: f64 = 70.0;
-pub(super) const MT: f64 = 30.0;
-pub(super) const MB: f64 = 45.0;
 
+/// `s` escaped for HTML text and attributes.
 pub(super) fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -22,6 +30,7 @@ pub(super) fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// The finite range of `vs` with 5 % padding; (0, 1) when there is none.
 pub(super) fn range(vs: &[f64]) -> (f64, f64) {
     let (lo, hi) = vs
         .iter()
@@ -33,137 +42,85 @@ pub(super) fn range(vs: &[f64]) -> (f64, f64) {
         return (0.0, 1.0);
     }
     if hi - lo < 1e-300 {
-        return (lo - 1.0, hi + 1.0);
+        let d = if lo.abs() > 0.0 { 0.05 * lo.abs() } else { 1.0 };
+        return (lo - d, hi + d);
     }
     let pad = 0.05 * (hi - lo);
     (lo - pad, hi + pad)
 }
 
-fn ticks(lo: f64, hi: f64) -> Vec<f64> {
-    let span = hi - lo;
-    let raw = span / 5.0;
-    let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0]
-        .iter()
-        .map(|m| m * mag)
-        .find(|s| span / s <= 6.0)
-        .unwrap_or(10.0 * mag);
-    let mut t = (lo / step).ceil() * step;
-    let mut out = Vec::new();
-    while t <= hi + 1e-9 * step && out.len() < 12 {
-        out.push(if t.abs() < 1e-12 * step { 0.0 } else { t });
-        t += step;
-    }
-    out
+/// `#rrggbb` as a colour (black when malformed).
+pub(super) fn color(hex: &str) -> RGBColor {
+    let h = hex.trim_start_matches('#');
+    let byte = |i: usize| {
+        h.get(i..i + 2)
+            .and_then(|s| u8::from_str_radix(s, 16).ok())
+            .unwrap_or(0)
+    };
+    RGBColor(byte(0), byte(2), byte(4))
 }
 
-fn fmt_tick(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 {
-        "0".into()
-    } else if !(1e-3..1e5).contains(&a) {
-        format!("{v:.1e}")
-    } else {
-        let s = format!("{v:.4}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
-        s.to_string()
-    }
+/// A drawn mark.
+enum Mark {
+    Line {
+        pts: Vec<(f64, f64)>,
+        color: String,
+        right: bool,
+        dash: bool,
+    },
+    Dots {
+        pts: Vec<(f64, f64, String)>,
+    },
 }
 
-/// A plot area with a left axis, an optional right axis, and marks.
+/// What drawing a plot gives: plotters' errors boxed (a plot that fails says so in its place).
+pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
+
+/// A plot with numeric axes, recorded mark by mark and drawn by [`Plot::finish`].
 pub(super) struct Plot {
+    /// Extra SVG elements placed inside the plot (in its pixels).
     pub(super) svg: String,
+    title: String,
+    xl: String,
+    yl: String,
     x: (f64, f64),
     y: (f64, f64),
-    y2: Option<(f64, f64)>,
+    y2: Option<(String, (f64, f64))>,
+    marks: Vec<Mark>,
+    /// Legend entries: name and colour.
     pub(super) legend: Vec<(String, String)>,
+    size: (u32, u32),
 }
 
 impl Plot {
+    /// A plot titled `title` with axis labels `xl`, `yl` over the ranges `x`, `y`.
     pub(super) fn new(title: &str, xl: &str, yl: &str, x: (f64, f64), y: (f64, f64)) -> Self {
-        let mut svg = format!(
-            "<svg class=\"plot\" xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"{H}\" viewBox=\"0 0 {W} {H}\" role=\"img\" aria-label=\"{t}\">\n<text x=\"{cx}\" y=\"18\" text-anchor=\"middle\" font-size=\"14\" font-weight=\"bold\">{t}</text>\n",
-            t = esc(title),
-            cx = W / 2.0
-        );
-        let _ = writeln!(
-            svg,
-            "<rect x=\"{ML}\" y=\"{MT}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#888\"/>",
-            W - ML - MR,
-            H - MT - MB
-        );
-        let mut p = Self {
-            svg,
+        Self {
+            svg: String::new(),
+            title: title.into(),
+            xl: xl.into(),
+            yl: yl.into(),
             x,
             y,
             y2: None,
+            marks: Vec::new(),
             legend: Vec::new(),
-        };
-        for t in ticks(x.0, x.1) {
-            let px = p.px(t);
-            let _ = writeln!(
-                p.svg,
-                "<line x1=\"{px:.1}\" y1=\"{}\" x2=\"{px:.1}\" y2=\"{}\" stroke=\"#eee\"/><text x=\"{px:.1}\" y=\"{}\" text-anchor=\"middle\" font-size=\"11\">{}</text>",
-                MT,
-                H - MB,
-                H - MB + 15.0,
-                fmt_tick(t)
-            );
+            size: (W as u32, H as u32),
         }
-        for t in ticks(y.0, y.1) {
-            let py = p.py(t);
-            let _ = writeln!(
-                p.svg,
-                "<line x1=\"{ML}\" y1=\"{py:.1}\" x2=\"{}\" y2=\"{py:.1}\" stroke=\"#eee\"/><text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\" font-size=\"11\">{}</text>",
-                W - MR,
-                ML - 5.0,
-                py + 4.0,
-                fmt_tick(t)
-            );
-        }
-        let _ = writeln!(
-            p.svg,
-            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"12\">{}</text><text transform=\"translate(16,{}) rotate(-90)\" text-anchor=\"middle\" font-size=\"12\">{}</text>",
-            ML + (W - ML - MR) / 2.0,
-            H - 8.0,
-            esc(xl),
-            MT + (H - MT - MB) / 2.0,
-            esc(yl)
-        );
-        p
     }
 
-    pub(super) fn px(&self, v: f64) -> f64 {
-        ML + (v - self.x.0) / (self.x.1 - self.x.0) * (W - ML - MR)
-    }
-    fn py_in(r: (f64, f64), v: f64) -> f64 {
-        H - MB - (v - r.0) / (r.1 - r.0) * (H - MT - MB)
-    }
-    pub(super) fn py(&self, v: f64) -> f64 {
-        Self::py_in(self.y, v)
+    /// The same plot `width` pixels wide (two side by side).
+    pub(super) fn width(mut self, width: u32) -> Self {
+        self.size.0 = width;
+        self
     }
 
+    /// Adds a right axis labelled `label` over `r`.
     pub(super) fn right_axis(&mut self, label: &str, r: (f64, f64)) {
-        self.y2 = Some(r);
-        for t in ticks(r.0, r.1) {
-            let py = Self::py_in(r, t);
-            let _ = writeln!(
-                self.svg,
-                "<text x=\"{}\" y=\"{:.1}\" font-size=\"11\" fill=\"#1f77b4\">{}</text>",
-                W - MR + 5.0,
-                py + 4.0,
-                fmt_tick(t)
-            );
-        }
-        let _ = writeln!(
-            self.svg,
-            "<text transform=\"translate({},{}) rotate(90)\" text-anchor=\"middle\" font-size=\"12\" fill=\"#1f77b4\">{}</text>",
-            W - 14.0,
-            MT + (H - MT - MB) / 2.0,
-            esc(label)
-        );
+        self.y2 = Some((label.into(), r));
     }
 
+    /// Adds a line (on the right axis if `right`, dashed if `dash`) and its legend entry.
     pub(super) fn line(
         &mut self,
         xs: &[f64],
@@ -173,59 +130,187 @@ impl Plot {
         right: bool,
         dash: bool,
     ) {
-        let r = if right {
-            self.y2.unwrap_or(self.y)
-        } else {
-            self.y
-        };
-        let pts: Vec<String> = xs
+        let pts = xs
             .iter()
             .zip(ys)
             .filter(|(x, y)| x.is_finite() && y.is_finite())
-            .map(|(x, y)| format!("{:.1},{:.1}", self.px(*x), Self::py_in(r, *y)))
+            .map(|(x, y)| (*x, *y))
             .collect();
-        let _ = writeln!(
-            self.svg,
-            "<polyline fill=\"none\" stroke=\"{color}\" stroke-width=\"1.5\"{} points=\"{}\"/>",
-            if dash {
-                " stroke-dasharray=\"5,3\""
-            } else {
-                ""
-            },
-            pts.join(" ")
-        );
-        self.legend.push((name.to_string(), color.to_string()));
+        self.marks.push(Mark::Line {
+            pts,
+            color: color.into(),
+            right,
+            dash,
+        });
+        self.legend.push((name.into(), color.into()));
     }
 
+    /// Adds dots, the i-th in `colors[i]` (or the first colour).
     pub(super) fn dots(&mut self, xs: &[f64], ys: &[f64], colors: &[&str]) {
-        for (i, (x, y)) in xs.iter().zip(ys).enumerate() {
-            if !(x.is_finite() && y.is_finite()) {
-                continue;
-            }
-            let c = colors.get(i).or(colors.first()).copied().unwrap_or("#000");
-            let _ = writeln!(
-                self.svg,
-                "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"2.2\" fill=\"{c}\" fill-opacity=\"0.7\"/>",
-                self.px(*x),
-                self.py(*y)
-            );
-        }
+        let pts = xs
+            .iter()
+            .zip(ys)
+            .enumerate()
+            .filter(|(_, (x, y))| x.is_finite() && y.is_finite())
+            .map(|(i, (x, y))| {
+                let c = colors.get(i).or(colors.first()).copied().unwrap_or("#000");
+                (*x, *y, c.to_string())
+            })
+            .collect();
+        self.marks.push(Mark::Dots { pts });
     }
 
-    pub(super) fn finish(mut self) -> String {
-        for (k, (name, color)) in self.legend.iter().enumerate() {
-            let y = MT + 14.0 + 16.0 * k as f64;
-            let _ = writeln!(
-                self.svg,
-                "<rect x=\"{}\" y=\"{}\" width=\"12\" height=\"3\" fill=\"{color}\"/><text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text>",
-                ML + 8.0,
-                y - 4.0,
-                ML + 24.0,
-                y,
-                esc(name)
+    /// Marks drawn from data.
+    fn points(&self) -> usize {
+        self.marks
+            .iter()
+            .map(|m| match m {
+                Mark::Line { pts, .. } => pts.len(),
+                Mark::Dots { pts } => pts.len(),
+            })
+            .sum()
+    }
+
+    /// The plot as an `<svg class="plot">` element.
+    pub(super) fn finish(self) -> String {
+        let mut buf = String::new();
+        let drawn = self.draw(&mut buf);
+        wrap(buf, drawn, &self.title, self.points(), &self.svg)
+    }
+
+    fn draw(&self, buf: &mut String) -> DrawResult {
+        let root = SVGBackend::with_string(buf, self.size).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(&self.title, ("sans-serif", 15))
+            .margin(8)
+            .x_label_area_size(40)
+            .y_label_area_size(72)
+            .right_y_label_area_size(if self.y2.is_some() { 60 } else { 8 })
+            .build_cartesian_2d(self.x.0..self.x.1, self.y.0..self.y.1)?
+            .set_secondary_coord(
+                self.x.0..self.x.1,
+                self.y2.as_ref().map_or(self.y, |(_, r)| *r).0
+                    ..self.y2.as_ref().map_or(self.y, |(_, r)| *r).1,
             );
+        let (xs, ys) = ((self.x.1 - self.x.0) / 20.0, (self.y.1 - self.y.0) / 20.0);
+        let fx = |v: &f64| num::tick(*v, xs);
+        let fy = |v: &f64| num::tick(*v, ys);
+        chart
+            .configure_mesh()
+            .x_desc(self.xl.as_str())
+            .y_desc(self.yl.as_str())
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
+            .light_line_style(RGBColor(245, 245, 245))
+            .label_style(("sans-serif", 11))
+            .axis_desc_style(("sans-serif", 12))
+            .draw()?;
+        if let Some((label, r)) = &self.y2 {
+            let s2 = (r.1 - r.0) / 20.0;
+            let f2 = |v: &f64| num::tick(*v, s2);
+            chart
+                .configure_secondary_axes()
+                .y_desc(label.as_str())
+                .y_label_formatter(&f2)
+                .label_style(("sans-serif", 11).into_font().color(&color("#1f77b4")))
+                .axis_desc_style(("sans-serif", 12))
+                .draw()?;
         }
-        self.svg.push_str("</svg>\n");
-        self.svg
+        for m in &self.marks {
+            match m {
+                Mark::Line {
+                    pts,
+                    color: c,
+                    right,
+                    dash,
+                } => {
+                    let style = color(c).stroke_width(2);
+                    match (right, dash) {
+                        (false, false) => {
+                            chart.draw_series(LineSeries::new(pts.iter().copied(), style))?;
+                        }
+                        (false, true) => {
+                            chart.draw_series(DashedLineSeries::new(
+                                pts.iter().copied(),
+                                6,
+                                4,
+                                style,
+                            ))?;
+                        }
+                        (true, _) => {
+                            chart.draw_secondary_series(LineSeries::new(
+                                pts.iter().copied(),
+                                style,
+                            ))?;
+                        }
+                    }
+                }
+                Mark::Dots { pts } => {
+                    chart
+                        .draw_series(pts.iter().map(|(x, y, c)| {
+                            Circle::new((*x, *y), 3, color(c).mix(0.75).filled())
+                        }))?;
+                }
+            }
+        }
+        for (name, c) in &self.legend {
+            let col = color(c);
+            chart
+                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
+                .label(name.as_str())
+                .legend(move |(x, y)| Rectangle::new([(x, y - 2), (x + 14, y + 2)], col.filled()));
+        }
+        if !self.legend.is_empty() {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperLeft)
+                .background_style(WHITE.mix(0.85))
+                .border_style(RGBColor(200, 200, 200))
+                .label_font(("sans-serif", 11))
+                .draw()?;
+        }
+        root.present()?;
+        Ok(())
+    }
+}
+
+/// plotters' `<svg>` with the report's class, title, data count and extra elements; a message in
+/// place of the plot when drawing failed.
+pub(super) fn wrap(
+    svg: String,
+    drawn: DrawResult,
+    title: &str,
+    points: usize,
+    extra: &str,
+) -> String {
+    let attrs = format!(
+        "<svg class=\"plot\" role=\"img\" aria-label=\"{}\" data-points=\"{points}\" ",
+        esc(title)
+    );
+    match drawn {
+        Ok(()) => {
+            let mut s = svg.replacen("<svg ", &attrs, 1);
+            if !extra.is_empty()
+                && let Some(end) = s.rfind("</svg>")
+            {
+                s.insert_str(end, extra);
+            }
+            if !s.ends_with('\n') {
+                s.push('\n');
+            }
+            s
+        }
+        Err(e) => {
+            let mut s =
+                format!("{attrs}xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"40\">");
+            let _ = writeln!(
+                s,
+                "<text x=\"10\" y=\"24\" font-size=\"12\">{}: not drawn ({})</text></svg>",
+                esc(title),
+                esc(&e.to_string())
+            );
+            s
+        }
     }
 }
