@@ -73,10 +73,12 @@ fn print_report(r: &EvalReport, unit: &str) {
         r.binned.improvement_pct
     );
     outln!(
-        "out of range     {:.1} % of samples; input faults {}; gaps {}",
+        "out of range     {:.1} % of samples; input faults {}; gaps {} ({} restarted the \
+         feature state)",
         r.out_of_range_pct,
         r.input_faults,
-        r.gaps
+        r.gaps,
+        r.gaps_restarted
     );
     if !r.segments.is_empty() {
         outln!();
