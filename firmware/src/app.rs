@@ -21,7 +21,10 @@
 //!   them ([`CounterSnapshot::read_snapshot`]) when it is within [`INTERVAL_TOLERANCE`] of the
 //!   nominal periods it covers; otherwise by the nominal periods, flagged [`status::TIME_JUMP`];
 //! * timer periods the board missed altogether (an overrun longer than a period) are announced
-//!   with [`App::skip_periods`]: the next interval covers them, as after a bus error;
+//!   with [`App::skip_periods`]: the next interval covers them, as after a bus error, and for the
+//!   feature programs they are a gap, which the core carries the filters across as it does a
+//!   logger dropout on the host ([`tcomp_core::Channel::skip`]) — the same code, on the gap
+//!   sample only;
 //! * a channel whose blob is missing, corrupt or reads inputs it is not wired to runs with
 //!   `NO_MODEL`: raw value passed through, flagged.
 
@@ -264,11 +267,19 @@ impl<'a> App<'a> {
 
     /// `n` whole timer periods passed without a sample (the sample interrupt was held off for
     /// longer than a period): the counters kept counting, so the next read of every counter covers
-    /// them too and its rate is computed over all of them. Never merged silently: the board flags
-    /// the next frame ([`status::OVERRUN`]).
+    /// them too and its rate is computed over all of them, and every channel's next step covers
+    /// them as a gap in its feature program's input ([`tcomp_core::Channel::skip`]). Never merged
+    /// silently: the board flags the next frame ([`status::OVERRUN`]).
     pub fn skip_periods(&mut self, n: u16) {
+        if n == 0 {
+            return;
+        }
         for m in &mut self.missed {
             *m = m.saturating_add(n);
+        }
+        let skipped = PERIOD_S * f32::from(n);
+        for c in &mut self.channels {
+            c.skip(skipped);
         }
     }
 

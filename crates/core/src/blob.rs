@@ -29,7 +29,10 @@ pub const MAGIC: [u8; 4] = *b"TCMB";
 /// language raises this number (the assertion below insists) while every blob that does not use
 /// it keeps its bytes, and a reader that predates the operation refuses such a blob as a version it
 /// does not read ([`BlobError::UnsupportedVersion`]), never as a malformed one.
-pub const FORMAT_VERSION: u16 = 1;
+///
+/// Version 2 added `warmup(tau_s)` (time since power-on); a model without it is still version 1,
+/// bit for bit.
+pub const FORMAT_VERSION: u16 = 2;
 /// The oldest blob format version this build reads: the layout of [`Model`] has not changed since.
 pub const OLDEST_FORMAT_VERSION: u16 = 1;
 

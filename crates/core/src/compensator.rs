@@ -18,6 +18,10 @@
 //!   inside its range box (see [`crate::bound`]); the check makes "never NaN with status OK" hold
 //!   whatever the model.
 //!
+//! Time that passes without a sample (the board missed timer periods) is a gap:
+//! [`Channel::skip`] adds it to the next step, which carries the feature program's filters
+//! across it (see [`ProgramState::step_gap`]) instead of treating it as one ordinary period.
+//!
 //! A channel may refresh its correction less often than it samples
 //! ([`Channel::with_model_interval`]): thermal features move on time scales of seconds to hours, so
 //! a correction evaluated every k-th sample and held in between differs from the per-sample one by
@@ -140,10 +144,35 @@ impl<const N: usize, const F: usize> Channel<N, F> {
         self
     }
 
-    /// Forgets all history (after a gap, or when a new model is loaded); keeps the period and the
-    /// model interval.
+    /// Forgets all history (when a new model is loaded); keeps the period, the model interval and
+    /// the time since power-on of the start ([`Channel::set_time_on`]).
     pub fn reset(&mut self) {
+        let time_on = self.state.time_on();
         *self = Self::new(self.period_s).with_model_interval(self.model_interval, self.model_phase);
+        self.state.set_time_on(time_on);
+    }
+
+    /// Sets the time since power-on, seconds, of the channel's first sample (default 0, the
+    /// board's boot): where `warmup`'s clock starts (see [`ProgramState::set_time_on`]).
+    pub fn set_time_on(&mut self, seconds: f32) {
+        self.state.set_time_on(seconds);
+    }
+
+    /// `seconds` passed without a sample (periods the board missed): the next step covers them
+    /// too, as a gap across which the feature program's filters are carried
+    /// ([`ProgramState::step_gap`]). Costs the ordinary samples nothing.
+    pub fn skip(&mut self, seconds: f32) {
+        if seconds > 0.0 {
+            self.pending_dt += seconds;
+            self.state.mark_gap();
+        }
+    }
+
+    /// The next step follows a gap (its `dt` is the whole gap, longer than the channel's usual
+    /// step): the host's way of replaying a record with dropouts as [`Channel::skip`] does on the
+    /// board.
+    pub fn mark_gap(&mut self) {
+        self.state.mark_gap();
     }
 
     /// Readies the channel for `model` at its period: the feature program's filter coefficients

@@ -215,6 +215,11 @@ pub fn hyst(x: Expr, threshold: f64) -> Expr {
     Expr::call("hyst", [x, Expr::num(threshold)])
 }
 
+/// `warmup(tau_s)`: `e^(−t_on/τ)`, `t_on` the seconds since power-on.
+pub fn warmup(tau_s: f64) -> Expr {
+    Expr::call("warmup", [Expr::num(tau_s)])
+}
+
 /// `clamp(x, lo, hi)`.
 pub fn clamp(x: Expr, lo: Expr, hi: Expr) -> Expr {
     Expr::call("clamp", [x, lo, hi])

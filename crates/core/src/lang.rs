@@ -33,9 +33,18 @@
 //! | `lag(x, tau_s)` | first-order lag: `L[n] = L[n−1] + c·(x[n] − L[n−1])`, `c = 1 − e^(−Δt/τ)`, `L[0] = x[0]` (computed in the equivalent difference form, see [`crate::eval`]). These are the exact samples of a continuous lag driven by a zero-order hold, so a unit step gives `1 − e^(−kΔt/τ)` after `k` samples. | 1 |
 //! | `hyst(x, threshold)` | heating/cooling state: `+1` if `x[n] > h`, `−1` if `x[n] < −h`, else the previous value; `0` before either. Typically `hyst(rate(T), 0.05)`. | 1 |
 //! | `clamp(x, lo, hi)` | `x` limited to `[lo, hi]` | 1 |
+//! | `warmup(tau_s)` | warm-up after power-on: `e^(−t_on/τ)`, `t_on` the seconds since power-on — the board counts from the channel's start at boot, the host from the run's first row or the `--power-on` time given; `t_on[n] = t_on[n−1] + Δt[n]` (compensated summation), across gaps too, which never reset it. | 2 |
 //!
-//! Parameters after a function's first argument are constant expressions (folded at compile time):
-//! windows and time constants finite and > 0, thresholds finite and ≥ 0, `lo ≤ hi`.
+//! Parameters (the arguments after a function's operand; all of `warmup`'s) are constant
+//! expressions (folded at compile time): windows and time constants finite and > 0, thresholds
+//! finite and ≥ 0, `lo ≤ hi`.
+//!
+//! **Gaps.** A step the caller marks as a gap (a logger dropout on the host, a run of missed
+//! periods on the board; see [`crate::ProgramState::step_gap`]) advances `lag` and `rate` exactly
+//! as their nominal steps would over an input moving linearly across the gap (closed forms in
+//! [`crate::eval`]), `hyst` keeps its state and `warmup`'s clock counts the gap. A gap longer than
+//! [`crate::stream::RESET_AFTER_TIME_CONSTANTS`] times the program's longest time constant restarts
+//! `lag`, `rate` and `hyst` as on a first sample (the caller is told, to warn), never `warmup`.
 
 use core::fmt::{self, Write};
 
@@ -70,6 +79,8 @@ pub enum Code {
     Lag,
     /// `hyst`.
     Hyst,
+    /// `warmup`.
+    Warmup,
 }
 
 /// Where a parameter's value must lie.
@@ -116,6 +127,8 @@ pub enum Operands {
     One,
     /// One or more operands (`mean(a, ...)`), no parameters.
     OneOrMore,
+    /// No operand: every argument is a parameter (`warmup(tau_s)`, a function of time alone).
+    None,
 }
 
 /// One function of the language.
@@ -143,26 +156,41 @@ impl Function {
     pub fn admits_arg_count(&self, n: usize) -> bool {
         match self.operands {
             Operands::OneOrMore => n >= 1,
-            Operands::One => {
+            Operands::One | Operands::None => {
+                let operands = usize::from(self.operands == Operands::One);
                 let required = self.params.iter().filter(|p| p.default.is_none()).count();
-                (1 + required..=1 + self.params.len()).contains(&n)
+                (operands + required..=operands + self.params.len()).contains(&n)
             }
         }
     }
 
     /// Writes the call syntax, `rate(x[, window_s])`.
     pub fn write_syntax<W: Write>(&self, w: &mut W) -> fmt::Result {
-        match self.operands {
+        let mut first = match self.operands {
             Operands::OneOrMore => return write!(w, "{}(a, ...)", self.name),
-            Operands::One => write!(w, "{}(x", self.name)?,
-        }
-        for p in self.params {
-            match p.default {
-                Some(_) => write!(w, "[, {}]", p.name)?,
-                None => write!(w, ", {}", p.name)?,
+            Operands::One => {
+                write!(w, "{}(x", self.name)?;
+                false
             }
+            Operands::None => {
+                write!(w, "{}(", self.name)?;
+                true
+            }
+        };
+        for p in self.params {
+            let sep = if first { "" } else { ", " };
+            match p.default {
+                Some(_) => write!(w, "[{sep}{}]", p.name)?,
+                None => write!(w, "{sep}{}", p.name)?,
+            }
+            first = false;
         }
         w.write_char(')')
+    }
+
+    /// The index of the first parameter among the call's arguments (after the operand, if any).
+    pub fn first_param(&self) -> usize {
+        usize::from(self.operands == Operands::One)
     }
 }
 
@@ -176,7 +204,7 @@ const WINDOW: Param = Param {
 };
 
 /// The functions, in the order the error messages list them.
-pub const FUNCTIONS: [Function; 7] = [
+pub const FUNCTIONS: [Function; 8] = [
     Function {
         name: "sq",
         operands: Operands::One,
@@ -258,6 +286,19 @@ pub const FUNCTIONS: [Function; 7] = [
         stateful: false,
         since: 1,
         definition: "`x` limited to `[lo, hi]`",
+    },
+    Function {
+        name: "warmup",
+        operands: Operands::None,
+        params: &[Param {
+            name: "tau_s",
+            domain: Domain::Positive,
+            default: None,
+        }],
+        op: Some(Code::Warmup),
+        stateful: true,
+        since: 2,
+        definition: "warm-up after power-on: `e^(−t_on/τ)`, `t_on` the seconds since power-on — the board counts from the channel's start at boot, the host from the run's first row or the `--power-on` time given; `t_on[n] = t_on[n−1] + Δt[n]` (compensated summation), across gaps too, which never reset it.",
     },
 ];
 
@@ -354,7 +395,7 @@ struct Rules {
     params: u8,
 }
 
-const CODES: usize = Code::Hyst as usize + 1;
+const CODES: usize = Code::Warmup as usize + 1;
 
 static RULES: [Rules; CODES] = {
     let mut rules = [Rules {
@@ -423,7 +464,7 @@ pub fn write_names<W: Write>(w: &mut W) -> fmt::Result {
     Ok(())
 }
 
-/// Writes the names of the stateful functions, `rate/lag/hyst` (for messages).
+/// Writes the names of the stateful functions, `rate/lag/hyst/warmup` (for messages).
 pub fn write_stateful_names<W: Write>(w: &mut W) -> fmt::Result {
     for (i, f) in FUNCTIONS.iter().filter(|f| f.stateful).enumerate() {
         if i > 0 {

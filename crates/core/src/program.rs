@@ -80,13 +80,20 @@ pub enum Op<S = f32> {
         /// Threshold (positive).
         threshold: S,
     },
+    /// Warm-up after power-on, `e^(−t_on/τ)` (since blob format version 2).
+    Warmup {
+        /// State slot (the clock).
+        slot: u8,
+        /// Time constant in seconds.
+        tau_s: S,
+    },
 }
 
 impl<S: Real> Op<S> {
     /// The operand nodes of this operation (up to two).
     pub fn operands(&self) -> (Option<u8>, Option<u8>) {
         match *self {
-            Op::Input(_) | Op::Const(_) => (None, None),
+            Op::Input(_) | Op::Const(_) | Op::Warmup { .. } => (None, None),
             Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) => (Some(a), Some(b)),
             Op::Neg(a) | Op::Sq(a) | Op::Abs(a) => (Some(a), None),
             Op::Clamp { x, .. } | Op::Rate { x, .. } | Op::Lag { x, .. } | Op::Hyst { x, .. } => {
@@ -111,6 +118,7 @@ impl<S: Real> Op<S> {
             Op::Rate { .. } => Code::Rate,
             Op::Lag { .. } => Code::Lag,
             Op::Hyst { .. } => Code::Hyst,
+            Op::Warmup { .. } => Code::Warmup,
         }
     }
 
@@ -122,7 +130,8 @@ impl<S: Real> Op<S> {
             Op::Clamp { lo, hi, .. } => ([lo, hi], 2),
             Op::Rate { window_s: p, .. }
             | Op::Lag { tau_s: p, .. }
-            | Op::Hyst { threshold: p, .. } => ([p, p], 1),
+            | Op::Hyst { threshold: p, .. }
+            | Op::Warmup { tau_s: p, .. } => ([p, p], 1),
             Op::Input(_)
             | Op::Add(..)
             | Op::Sub(..)
@@ -136,7 +145,8 @@ impl<S: Real> Op<S> {
 
     /// The operation `code` applied to `x` with parameters `p` and state slot `slot` — how a
     /// function of [`crate::lang::FUNCTIONS`] compiles; `None` for codes that are not a function's
-    /// operation. Missing parameters read as 0 (the compiler passes them all).
+    /// operation. Missing parameters read as 0 (the compiler passes them all); `x` is ignored by
+    /// a function without operand (`warmup`).
     pub fn function(code: Code, x: u8, slot: u8, p: &[S]) -> Option<Self> {
         let p0 = p.first().copied().unwrap_or(S::ZERO);
         let p1 = p.get(1).copied().unwrap_or(p0);
@@ -155,6 +165,7 @@ impl<S: Real> Op<S> {
                 slot,
                 threshold: p0,
             },
+            Code::Warmup => Op::Warmup { slot, tau_s: p0 },
             Code::Input
             | Code::Const
             | Code::Add
@@ -168,7 +179,10 @@ impl<S: Real> Op<S> {
     /// The state slot of a stateful operation.
     pub fn slot(&self) -> Option<u8> {
         match *self {
-            Op::Rate { slot, .. } | Op::Lag { slot, .. } | Op::Hyst { slot, .. } => Some(slot),
+            Op::Rate { slot, .. }
+            | Op::Lag { slot, .. }
+            | Op::Hyst { slot, .. }
+            | Op::Warmup { slot, .. } => Some(slot),
             Op::Input(_)
             | Op::Const(_)
             | Op::Add(..)
@@ -327,6 +341,25 @@ impl<'a, const N: usize, const F: usize, S: Real> Program<'a, N, F, S> {
             }
         }
         Ok(())
+    }
+
+    /// The program's longest memory, seconds: the largest `lag` time constant or `rate` window (a
+    /// window is two time constants of its cascaded lags, whose repeated pole forgets more slowly
+    /// than one lag); 0 when it has neither. A gap longer than a few of these is one the filters
+    /// cannot carry meaningfully (see [`crate::stream::RESET_AFTER_TIME_CONSTANTS`]).
+    pub fn longest_time_constant(&self) -> S {
+        let mut longest = S::ZERO;
+        for op in self.nodes.iter() {
+            let t = match *op {
+                Op::Lag { tau_s, .. } => tau_s,
+                Op::Rate { window_s, .. } => window_s,
+                _ => continue,
+            };
+            if t > longest {
+                longest = t;
+            }
+        }
+        longest
     }
 
     /// The blob format version this program needs: the newest `since` ([`crate::lang`]) of its

@@ -45,6 +45,10 @@ pub trait Real:
     fn is_finite(self) -> bool;
     /// A decimal number as Rust's `str::parse` reads it (nearest value), or `None`.
     fn parse(text: &str) -> Option<Self>;
+    /// The whole number `m` (1 ≤ m ≤ 2²⁴) that `self` is within `10⁻³ + 10⁻⁶·m` of (rounding, not
+    /// jitter), if any: a gap of `Δ/δ` nominal steps that is a run of whole missed steps (see
+    /// [`crate::eval`]).
+    fn whole(self) -> Option<u32>;
 }
 
 impl Real for f32 {
@@ -78,6 +82,11 @@ impl Real for f32 {
     fn parse(text: &str) -> Option<Self> {
         text.parse().ok()
     }
+    fn whole(self) -> Option<u32> {
+        let m = libm::roundf(self);
+        ((1.0..=16_777_216.0).contains(&m) && libm::fabsf(self - m) <= 1e-3 + 1e-6 * m)
+            .then_some(m as u32)
+    }
 }
 
 impl Real for f64 {
@@ -110,5 +119,10 @@ impl Real for f64 {
     }
     fn parse(text: &str) -> Option<Self> {
         text.parse().ok()
+    }
+    fn whole(self) -> Option<u32> {
+        let m = libm::round(self);
+        ((1.0..=16_777_216.0).contains(&m) && libm::fabs(self - m) <= 1e-3 + 1e-6 * m)
+            .then_some(m as u32)
     }
 }

@@ -8,10 +8,37 @@
 //!
 //! Generic over the number type ([`Real`]): the board runs `ProgramState<N>` (f32), the simulator
 //! `ProgramState<N, f64>` over the same code.
+//!
+//! A gap in the samples (a logger dropout, periods the board missed) is a step the caller marks
+//! ([`ProgramState::step_gap`], or [`ProgramState::mark_gap`] before an ordinary step): the
+//! filters are carried across it exactly for an input that moved linearly (see [`crate::eval`]),
+//! without touching the nominal step's coefficients, so the sample after the gap costs a few
+//! operations per filter and the one after that none extra. The branch to the gap's code sits
+//! inside the test for a changed time step that every step makes anyway, so a fixed-rate loop
+//! pays nothing for it on ordinary samples. A gap longer than [`RESET_AFTER_TIME_CONSTANTS`] times
+//! the program's longest time constant restarts the filters instead ([`gap_resets`]): after
+//! 5 τ a first-order state has forgotten 99.3 % of its past, so carrying it on would assume the
+//! input was linear over a stretch the filters no longer remember — a guess, not a measurement.
+//! The clock of `warmup` (seconds since power-on) is never restarted by a gap.
 
 use crate::eval::{self, Slot};
 use crate::program::{Op, Program};
 use crate::{MAX_STATEFUL, Real};
+
+/// A gap longer than this many of the program's longest time constant restarts its filters
+/// (see the module doc): `e^(−5) = 0.7 %` of the state before it would be left.
+pub const RESET_AFTER_TIME_CONSTANTS: f32 = 5.0;
+
+/// Whether a gap of `gap_s` seconds restarts `program`'s filters rather than carrying them: longer
+/// than [`RESET_AFTER_TIME_CONSTANTS`] times its longest time constant
+/// ([`Program::longest_time_constant`]). A program without `lag` or `rate` carries every gap.
+pub fn gap_resets<const N: usize, const F: usize, S: Real>(
+    program: &Program<'_, N, F, S>,
+    gap_s: S,
+) -> bool {
+    let longest = program.longest_time_constant();
+    longest > S::ZERO && gap_s > S::from_f32(RESET_AFTER_TIME_CONSTANTS) * longest
+}
 
 /// Why a sample could not advance the program. The state is left untouched in every case.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,7 +82,11 @@ pub struct ProgramState<const N: usize, S = f32> {
     slots: [Slot<S>; MAX_STATEFUL],
     /// The Δt the slot coefficients were computed for; NaN when none.
     coef_dt: S,
+    /// Seconds since power-on of the first sample (`warmup`'s clock starts there).
+    time_on: S,
     started: bool,
+    /// The next step follows a gap.
+    gap_pending: bool,
 }
 
 impl<const N: usize, S: Real> Default for ProgramState<N, S> {
@@ -71,13 +102,63 @@ impl<const N: usize, S: Real> ProgramState<N, S> {
             values: [S::ZERO; N],
             slots: [Slot::EMPTY; MAX_STATEFUL],
             coef_dt: S::NAN,
+            time_on: S::ZERO,
             started: false,
+            gap_pending: false,
         }
     }
 
-    /// Forgets all history: the next sample is treated as the first (use it across gaps in a record).
+    /// Forgets all history: the next sample is treated as the first. Keeps the time since
+    /// power-on set by [`set_time_on`](Self::set_time_on). A gap in a record is not a reason:
+    /// [`step_gap`](Self::step_gap) carries the state across it.
     pub fn reset(&mut self) {
-        *self = Self::new();
+        *self = Self {
+            time_on: self.time_on,
+            ..Self::new()
+        };
+    }
+
+    /// Sets the time since power-on, in seconds, of the first sample (default 0): where
+    /// `warmup`'s clock starts. The board starts its channels at boot (0); the host starts at the
+    /// run's first row, which is power-on unless the user says otherwise (`--power-on`). Takes
+    /// effect at the next first sample.
+    pub fn set_time_on(&mut self, seconds: S) {
+        self.time_on = seconds;
+    }
+
+    /// The time since power-on of the first sample (see [`set_time_on`](Self::set_time_on)).
+    pub fn time_on(&self) -> S {
+        self.time_on
+    }
+
+    /// Marks the next step as following a gap: it is carried across as [`step_gap`](Self::step_gap)
+    /// does, provided its `dt` differs from the current nominal step (a gap always is longer).
+    /// The board's way ([`crate::Channel::skip`]): it costs the ordinary samples nothing.
+    pub fn mark_gap(&mut self) {
+        self.gap_pending = true;
+    }
+
+    /// Advances the program by one sample that follows a gap of `dt` seconds since the previous one:
+    /// `lag` and `rate` are carried across it exactly for an input that moved linearly, `hyst` keeps
+    /// its state, `warmup`'s clock counts it — or, when [`gap_resets`] says the gap is too long, the
+    /// filters restart as on a first sample (the clock still counts it). The nominal step's
+    /// coefficients are kept. On error nothing changes. The first sample of a state is an ordinary
+    /// first sample.
+    pub fn step_gap<const F: usize>(
+        &mut self,
+        program: &Program<'_, N, F, S>,
+        inputs: &[S],
+        dt: S,
+    ) -> Result<(), StepError> {
+        check_inputs(program, inputs)?;
+        if !self.started {
+            return self.step(program, inputs, dt);
+        }
+        if !(dt.is_finite() && dt > S::ZERO) {
+            return Err(StepError::BadTimeStep);
+        }
+        self.step_across_gap(program, inputs, dt);
+        Ok(())
     }
 
     /// True once a sample has been taken.
@@ -98,21 +179,19 @@ impl<const N: usize, S: Real> ProgramState<N, S> {
         inputs: &[S],
         dt: S,
     ) -> Result<(), StepError> {
-        for index in 0..program.inputs.len() {
-            match inputs.get(index) {
-                None => return Err(StepError::MissingInput { index: index as u8 }),
-                Some(v) if !v.is_finite() => {
-                    return Err(StepError::NonFiniteInput { index: index as u8 });
-                }
-                Some(_) => {}
-            }
-        }
+        check_inputs(program, inputs)?;
         let first = !self.started;
-        if !first {
+        if first {
+            self.gap_pending = false;
+        } else {
             if !(dt.is_finite() && dt > S::ZERO) {
                 return Err(StepError::BadTimeStep);
             }
             if dt != self.coef_dt {
+                if self.gap_pending {
+                    self.step_across_gap(program, inputs, dt);
+                    return Ok(());
+                }
                 self.update_coefficients(program, dt);
             }
         }
@@ -158,6 +237,12 @@ impl<const N: usize, S: Real> ProgramState<N, S> {
             let (slot, tau, is_rate) = match *op {
                 Op::Rate { slot, window_s, .. } => (slot, Slot::rate_tau(window_s), true),
                 Op::Lag { slot, tau_s, .. } => (slot, tau_s, false),
+                Op::Warmup { slot, .. } => {
+                    if let Some(s) = self.slots.get_mut(slot as usize) {
+                        s.set_clock_step(dt);
+                    }
+                    continue;
+                }
                 _ => continue,
             };
             if let Some(s) = self.slots.get_mut(slot as usize) {
@@ -165,6 +250,72 @@ impl<const N: usize, S: Real> ProgramState<N, S> {
             }
         }
         self.coef_dt = dt;
+    }
+
+    /// One step across a gap of `dt` seconds (inputs checked, state started): see
+    /// [`step_gap`](Self::step_gap). Not inlined: it runs only on the sample after a gap.
+    #[inline(never)]
+    fn step_across_gap<const F: usize>(
+        &mut self,
+        program: &Program<'_, N, F, S>,
+        inputs: &[S],
+        dt: S,
+    ) {
+        self.gap_pending = false;
+        // Before any step with a time step there is no nominal one: the gap is one ordinary step.
+        if !self.coef_dt.is_finite() {
+            self.update_coefficients(program, dt);
+        }
+        let steps = dt / self.coef_dt;
+        let restart = gap_resets(program, dt);
+        for (i, op) in program.nodes.iter().enumerate() {
+            let v = self.gap_op(op, inputs, dt, steps, restart);
+            if let Some(slot) = self.values.get_mut(i) {
+                *slot = v;
+            }
+        }
+        self.started = true;
+    }
+
+    /// One operation on the sample after a gap of `dt` seconds, `steps` nominal steps long.
+    fn gap_op(&mut self, op: &Op<S>, inputs: &[S], dt: S, steps: S, restart: bool) -> S {
+        let (x, slot, tau) = match *op {
+            Op::Lag { x, slot, tau_s } => (x, slot, tau_s),
+            Op::Rate { x, slot, window_s } => (x, slot, Slot::rate_tau(window_s)),
+            Op::Hyst { x, slot, threshold } => {
+                let v = self.val(x);
+                return match self.slots.get_mut(slot as usize) {
+                    Some(s) => eval::hyst(s, v, threshold, restart),
+                    None => S::NAN,
+                };
+            }
+            Op::Warmup { slot, tau_s } => {
+                let start = self.time_on;
+                return match self.slots.get_mut(slot as usize) {
+                    Some(s) => eval::warmup(s, tau_s, dt, start, false),
+                    None => S::NAN,
+                };
+            }
+            _ => return self.eval_op(op, inputs, false),
+        };
+        let v = self.val(x);
+        let is_rate = matches!(op, Op::Rate { .. });
+        let Some(s) = self.slots.get_mut(slot as usize) else {
+            return S::NAN;
+        };
+        if restart {
+            return if is_rate {
+                eval::rate(s, v, true)
+            } else {
+                eval::lag(s, v, true)
+            };
+        }
+        let big_d = eval::gap_decay(s.decay(), tau, steps, dt);
+        if is_rate {
+            eval::rate_gap(s, v, big_d, steps)
+        } else {
+            eval::lag_gap(s, v, big_d, steps)
+        }
     }
 
     #[inline]
@@ -208,6 +359,32 @@ impl<const N: usize, S: Real> ProgramState<N, S> {
                 };
                 eval::hyst(s, v, threshold, first)
             }
+            Op::Warmup { slot, tau_s } => {
+                let start = self.time_on;
+                let Some(s) = self.slots.get_mut(slot as usize) else {
+                    return S::NAN;
+                };
+                let step = s.clock_step();
+                eval::warmup(s, tau_s, step, start, first)
+            }
         }
     }
+}
+
+/// Checks that every input the program reads is there and finite.
+#[inline(always)]
+fn check_inputs<const N: usize, const F: usize, S: Real>(
+    program: &Program<'_, N, F, S>,
+    inputs: &[S],
+) -> Result<(), StepError> {
+    for index in 0..program.inputs.len() {
+        match inputs.get(index) {
+            None => return Err(StepError::MissingInput { index: index as u8 }),
+            Some(v) if !v.is_finite() => {
+                return Err(StepError::NonFiniteInput { index: index as u8 });
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(())
 }

@@ -44,9 +44,9 @@ impl SensorKind {
 /// A physical mechanism of temperature-induced (or other) bias: what the simulator can put into a
 /// run and hide, and what the diagnosis can name as missing.
 ///
-/// The simulator simulates the first eight; [`EffectKind::Square`] and [`EffectKind::NonThermal`]
-/// are the diagnosis's general forms of two of them (the curvature a polynomial lacks, any
-/// non-thermal input column of which the supply voltage is one).
+/// The simulator simulates all but [`EffectKind::Square`] and [`EffectKind::NonThermal`], the
+/// diagnosis's general forms of two of them (the curvature a polynomial lacks, any non-thermal
+/// input column of which the supply voltage is one).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EffectKind {
@@ -72,11 +72,17 @@ pub enum EffectKind {
     /// `non_thermal`, as the diagnosis's JSON always has; [`EffectKind::name`] says
     /// `non_thermal_input`.
     NonThermal,
+    /// Rate of a thermal gradient, d(Ta − Ts)/dt.
+    GradientRate,
+    /// A thermal gradient felt through a lag, lag(Ta − Ts, τ).
+    GradientLag,
+    /// Temperature times a thermal gradient, T·(Ta − Ts).
+    TempGradientProduct,
 }
 
 impl EffectKind {
     /// Every effect, in a fixed order.
-    pub const ALL: [EffectKind; 10] = [
+    pub const ALL: [EffectKind; 13] = [
         EffectKind::Poly,
         EffectKind::Rate,
         EffectKind::Gradient,
@@ -87,6 +93,9 @@ impl EffectKind {
         EffectKind::SupplyVoltage,
         EffectKind::Square,
         EffectKind::NonThermal,
+        EffectKind::GradientRate,
+        EffectKind::GradientLag,
+        EffectKind::TempGradientProduct,
     ];
 
     /// The snake_case name used in scenario files, the truth file and the diagnosis.
@@ -102,6 +111,9 @@ impl EffectKind {
             EffectKind::SupplyVoltage => "supply_voltage",
             EffectKind::Square => "square",
             EffectKind::NonThermal => "non_thermal_input",
+            EffectKind::GradientRate => "gradient_rate",
+            EffectKind::GradientLag => "gradient_lag",
+            EffectKind::TempGradientProduct => "temp_gradient_product",
         }
     }
 

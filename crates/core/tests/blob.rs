@@ -186,7 +186,7 @@ fn unknown_enum_tags_are_malformed_and_named_not_capacity() {
     // The first operation's tag: after magic, version, meta, inputs, signals and the node count.
     let at = 5 + wire_len(&m.meta) + wire_len(&m.program.inputs) + wire_len(&m.program.signals) + 1;
     assert_eq!(good[at], 0, "the first node reads an input (tag 0)");
-    for tag in [13u8, 0x7F] {
+    for tag in [14u8, 0x7F] {
         let mut bad = good.clone();
         bad[at] = tag;
         reseal(&mut bad);
@@ -214,7 +214,7 @@ fn every_reason_has_its_message() {
         (BlobError::BadMagic, "not a tcomp model blob (bad magic)"),
         (
             BlobError::UnsupportedVersion(7),
-            "unsupported blob format version 7 (this build reads 1)",
+            "unsupported blob format version 7 (this build reads 2)",
         ),
         (
             BlobError::Checksum,
@@ -234,7 +234,7 @@ fn every_reason_has_its_message() {
     reseal(&mut v9);
     assert_eq!(
         HostModel::decode(&v9).unwrap_err().to_string(),
-        "unsupported blob format version 9 (this build reads 1)"
+        "unsupported blob format version 9 (this build reads 2)"
     );
     v9[4] = 1;
     assert_eq!(
@@ -290,6 +290,10 @@ fn serde_of_the_guarded_enums_round_trips_every_variant() {
             slot: 2,
             threshold: 0.05,
         },
+        Op::Warmup {
+            slot: 3,
+            tau_s: 600.0,
+        },
     ];
     for (i, op) in ops.iter().enumerate() {
         let mut buf = [0u8; 32];
@@ -299,7 +303,7 @@ fn serde_of_the_guarded_enums_round_trips_every_variant() {
     }
     // An unknown tag on its own gives postcard's marker, never the capacity error.
     assert_eq!(
-        postcard::from_bytes::<Op>(&[13, 0]).unwrap_err(),
+        postcard::from_bytes::<Op>(&[14, 0]).unwrap_err(),
         postcard::Error::WontImplement
     );
 }

@@ -7,7 +7,7 @@ use tcomp_core::lang::{self, Code, FUNCTIONS, SYNTAX};
 use tcomp_core::testing::example_model;
 use tcomp_core::{BlobError, Model, Op, ParseErrorKind, ProgramBuilder};
 
-const ALL_CODES: [Code; 13] = [
+const ALL_CODES: [Code; 14] = [
     Code::Input,
     Code::Const,
     Code::Add,
@@ -21,6 +21,7 @@ const ALL_CODES: [Code; 13] = [
     Code::Rate,
     Code::Lag,
     Code::Hyst,
+    Code::Warmup,
 ];
 
 /// The table in `lang.rs`'s module documentation, as markdown lines.
@@ -65,6 +66,7 @@ fn each_function_compiles_to_its_operation_and_the_program_needs_its_version() {
     for f in &FUNCTIONS {
         let args: Vec<&str> = match (f.name, f.params.len()) {
             ("clamp", _) => vec!["x", "-1", "2"],
+            ("warmup", _) => vec!["600"],
             (_, 0) => vec!["x", "y"].into_iter().take(1).collect(),
             (_, n) => std::iter::once("x")
                 .chain(std::iter::repeat_n("3", n))
@@ -109,12 +111,12 @@ fn messages_list_the_table() {
     };
     assert_eq!(
         err("foo(x)"),
-        "column 1: unknown function (known: sq, abs, mean, rate, lag, hyst, clamp)"
+        "column 1: unknown function (known: sq, abs, mean, rate, lag, hyst, clamp, warmup)"
     );
     assert_eq!(
         err("sq(x, 1)"),
         "column 1: wrong number of arguments (sq(x), abs(x), mean(a, ...), rate(x[, window_s]), \
-         lag(x, tau_s), hyst(x, threshold), clamp(x, lo, hi))"
+         lag(x, tau_s), hyst(x, threshold), clamp(x, lo, hi), warmup(tau_s))"
     );
     let mut b = ProgramBuilder::<64, 1>::new();
     let too_many = (0..=tcomp_core::MAX_STATEFUL)
@@ -124,7 +126,7 @@ fn messages_list_the_table() {
     let e = b.feature(Box::leak(too_many.into_boxed_str())).unwrap_err();
     assert!(
         e.to_string()
-            .ends_with(": too many rate/lag/hyst operators"),
+            .ends_with(": too many rate/lag/hyst/warmup operators"),
         "{e}"
     );
 }

@@ -12,7 +12,8 @@
 //!    effects are evaluated from those *recorded* values with the core's streaming operators at
 //!    `dt = step_s` (so the truth expressions are exact over the file); the true output integral over
 //!    the row (reference + bias + noise) feeds the pulse counter; the quantised, rounded output is
-//!    written, and `output − reference − bias` is the noise actually drawn.
+//!    written, and `output − reference − bias` is the noise actually drawn. A row inside a logger
+//!    dropout ([`crate::dropout`]) is computed all the same and not written.
 //!
 //! Parts: [`Physics`] (step 1), the effects' states (step 2's bias), `output` (the counter, the
 //! reference and the statistics of the noise drawn), `record` (the truth of the finished run).
@@ -333,6 +334,7 @@ pub(crate) fn run<S: RowSink>(sc: &Scenario, sink: &mut S) -> Result<Truth> {
     let mut sums = RowSums::new(sc.thermometers.len());
     let mut therms = vec![0.0; sc.thermometers.len()];
     let mut row = vec![0.0; columns.len()];
+    let mut written = 0u64;
     for _ in 0..grid.rows {
         sums.clear();
         for _ in 0..grid.k {
@@ -346,6 +348,11 @@ pub(crate) fn run<S: RowSink>(sc: &Scenario, sink: &mut S) -> Result<Truth> {
         };
         let bias = effects.step(&inputs, grid.h);
         let out = output.step(&m, bias, grid.h, &mut drawn);
+        // A logger dropout loses the row; everything above ran on.
+        if crate::dropout::hidden(&sc.dropouts, m.time) {
+            continue;
+        }
+        written += 1;
         fill_row(&mut row, &m, &therms, out, output.reference);
         sink.row(&row)?;
     }
@@ -353,7 +360,10 @@ pub(crate) fn run<S: RowSink>(sc: &Scenario, sink: &mut S) -> Result<Truth> {
     Ok(record::truth(
         sc,
         &ctx,
-        grid,
+        Grid {
+            rows: written,
+            ..grid
+        },
         columns,
         effects,
         drawn,

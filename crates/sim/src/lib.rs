@@ -17,10 +17,11 @@
 //! Modules: [`profile`] (chamber profiles), [`thermal`] (lags, self-heating), [`effects`] (named
 //! bias effects, one module each), [`sensor`] (what the simulator adds to the core's sensor kinds),
 //! [`noise`] (white, Gauss–Markov, pulses, statistics), [`scenario`] (the data and its validation),
-//! [`scenario_file`] (TOML), [`writer`] (streaming CSV), [`progress`] (reporting long runs),
+//! [`scenario_file`] (TOML), [`dropout`] (rows a logger lost), [`writer`] (streaming CSV), [`progress`] (reporting long runs),
 //! [`truth`] (JSON truth, and [`truth::evaluate`], which evaluates its expressions over a file with
 //! the core's own compiler and evaluator in f64), [`presets`].
 
+pub mod dropout;
 pub mod effects;
 mod engine;
 pub mod error;

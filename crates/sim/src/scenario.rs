@@ -51,6 +51,10 @@
 //! [verify_profile]              # optional, same shape: the verification run (default: a seeded
 //!                               # random profile over the training range)
 //!
+//! dropouts = [{ start_s = 7200, length_s = 300 }]   # optional: rows not written (or
+//!                               # random_dropouts = { count = 5, length_s = 300, seed = 3 }),
+//!                               # see `crate::dropout`
+//!
 //! [[effects]]                   # any number; see `Effect` for each one's keys
 //! name = "poly"
 //! coefficients = [0.005, 1e-4, 2e-6]
@@ -63,6 +67,7 @@ use serde::{Deserialize, Serialize};
 
 pub use tcomp_core::SensorKind;
 
+use crate::dropout::Dropout;
 use crate::effects::{Context, Effect, EffectKind};
 use crate::error::{Error, Result};
 use crate::noise::NoiseSpec;
@@ -141,6 +146,9 @@ pub struct Scenario {
     pub step_s: f64,
     /// Seed of all random draws.
     pub seed: u64,
+    /// Logger dropouts: rows not written while the physics runs on (see [`crate::dropout`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dropouts: Vec<Dropout>,
 }
 
 /// The fastest internal rate accepted, Hz. The sensors simulated deliver their pulse or digital
@@ -175,7 +183,14 @@ impl Scenario {
             rate_hz: 1.0,
             step_s: 1.0,
             seed: 1,
+            dropouts: Vec::new(),
         }
+    }
+
+    /// Sets the logger dropouts.
+    pub fn with_dropouts(mut self, dropouts: Vec<Dropout>) -> Self {
+        self.dropouts = dropouts;
+        self
     }
 
     /// Replaces the effects.
@@ -265,6 +280,7 @@ impl Scenario {
         self.validate_thermometers()?;
         self.noise.validate("noise")?;
         self.supply.validate()?;
+        crate::dropout::validate(&self.dropouts, self.profile.duration_s(), self.step_s)?;
         let (names, unit) = self.context();
         let ctx = Context {
             sensor: self.sensor,

@@ -9,6 +9,7 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 use tcomp_core::SensorKind;
 
+use crate::dropout::{Dropout, RandomDropouts};
 use crate::effects::{self, Effect, EffectKind};
 use crate::error::{Error, Result};
 use crate::profile::{Profile, RandomProfile, Segment};
@@ -30,6 +31,8 @@ struct ScenarioToml {
     verify_profile: Option<ProfileToml>,
     #[serde(default)]
     effects: Vec<toml::Table>,
+    dropouts: Option<Vec<Dropout>>,
+    random_dropouts: Option<RandomDropouts>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -145,6 +148,17 @@ pub(crate) fn parse_toml(text: &str) -> Result<(Scenario, Option<Profile>)> {
     for (i, table) in raw.effects.into_iter().enumerate() {
         sc.effects.push(effect(table, &format!("effects[{i}]"))?);
     }
+    sc.dropouts = match (raw.dropouts, raw.random_dropouts) {
+        (Some(_), Some(_)) => {
+            return Err(Error::invalid(
+                "random_dropouts",
+                "give either dropouts or random_dropouts, not both",
+            ));
+        }
+        (Some(d), None) => d,
+        (None, Some(r)) => r.resolve(sc.profile.duration_s())?,
+        (None, None) => Vec::new(),
+    };
     sc.validate()?;
     Ok((sc, verify))
 }

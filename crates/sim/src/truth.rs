@@ -133,6 +133,9 @@ pub struct Truth {
     pub noise: NoiseTruth,
     /// Discrete-time definitions of the operators the expressions were evaluated with.
     pub operators: BTreeMap<String, String>,
+    /// Logger dropouts: stretches whose rows are missing from the file (the physics ran on).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dropouts: Vec<crate::dropout::Dropout>,
     /// How the effects relate to the columns.
     pub notes: Vec<String>,
 }
@@ -175,7 +178,8 @@ fn expr_error(expr: &str, message: impl std::fmt::Display) -> Error {
 }
 
 /// Evaluates `expr` over every row of `table` with sample period `dt_s`, compiled and stepped by
-/// the core in f64; `signals` maps names to their defining expressions (which may use earlier
+/// the core in f64 (a step of the `time_s` column longer than 1.5 `dt_s`, a logger dropout, is a
+/// gap the state is carried across); `signals` maps names to their defining expressions (which may use earlier
 /// signals in name order). Every name must be a signal or a column of `table`.
 pub fn evaluate(
     table: &Table,
@@ -207,6 +211,7 @@ pub fn evaluate(
         .collect::<Result<Vec<&[f64]>>>()?;
     let node = program.features.first().copied().unwrap_or(0) as usize;
     let rows = table.rows();
+    let time = table.column("time_s");
     let mut state = ProgramState::<NODES, f64>::new();
     let mut inputs = vec![0.0; columns.len()];
     let mut out = Vec::with_capacity(rows);
@@ -214,9 +219,17 @@ pub fn evaluate(
         for (slot, col) in inputs.iter_mut().zip(&columns) {
             *slot = col.get(r).copied().unwrap_or(f64::NAN);
         }
-        state
-            .step(&program, &inputs, dt_s)
-            .map_err(|e| expr_error(expr, format!("row {r}: {e}")))?;
+        // A step longer than one and a half rows is a logger dropout: carried across, as the
+        // trainer does.
+        let gap = r.checked_sub(1).and_then(|p| {
+            let t = time?;
+            Some(t.get(r)? - t.get(p)?).filter(|&d| d > 1.5 * dt_s)
+        });
+        match gap {
+            Some(d) => state.step_gap(&program, &inputs, d),
+            None => state.step(&program, &inputs, dt_s),
+        }
+        .map_err(|e| expr_error(expr, format!("row {r}: {e}")))?;
         out.push(state.value(node));
     }
     Ok(out)

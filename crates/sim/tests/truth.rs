@@ -283,3 +283,36 @@ fn expressions_with_unknown_columns_are_rejected() {
     assert!(err.to_string().contains("t_anode_c"), "{err}");
     assert!(truth_file::evaluate(&table, &BTreeMap::new(), "lag(t_coil_c, 60", 1.0).is_err());
 }
+
+/// The gradient effects and the warm-up are written in the language the discovery searches:
+/// the expressions a model needs, each exact over the file (checked for every effect above).
+#[test]
+fn the_new_effects_are_written_as_the_features_a_model_needs() {
+    let cases = [
+        (EffectKind::GradientRate, "rate(t_anode_c - t_shell_c)"),
+        (EffectKind::GradientLag, "lag(t_anode_c - t_shell_c, 1800)"),
+        (
+            EffectKind::TempGradientProduct,
+            "T * (t_anode_c - t_shell_c)",
+        ),
+        (EffectKind::Warmup, "warmup(1200)"),
+    ];
+    for (kind, expr) in cases {
+        let p = presets::with_effects(SensorKind::Rlg, &[kind]).unwrap();
+        let (table, truth) = simulate(&p.train).unwrap();
+        assert_eq!(truth.effects[0].expressions, vec![expr.to_string()]);
+        assert_eq!(truth.true_features.features, vec![expr.to_string()]);
+        let r = residual(&table, &truth);
+        assert!(
+            (std(&r) - truth.noise.std_raw).abs() < 1e-6 * truth.noise.std_raw,
+            "{expr}"
+        );
+    }
+    for kind in [
+        EffectKind::GradientRate,
+        EffectKind::GradientLag,
+        EffectKind::TempGradientProduct,
+    ] {
+        assert!(!effects::applies_to(kind, SensorKind::Qma), "{kind:?}");
+    }
+}

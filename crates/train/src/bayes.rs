@@ -368,6 +368,7 @@ impl crate::method::FitMethod for Bayes {
                 &set.data,
                 time,
                 &set.starts,
+                set.time_on_s,
                 &set.ranges,
                 &set.bins,
             )?

@@ -31,6 +31,7 @@ pub fn cubic_basis(
     data: &Dataset,
     time: &[f64],
     starts: &[usize],
+    time_on_s: f64,
     ranges: &[FeatureRange],
     b: &[(usize, usize)],
 ) -> Result<Option<CubicBasis>, TrainError> {
@@ -48,7 +49,7 @@ pub fn cubic_basis(
         return Ok(None);
     }
     let nf = spec.features.len();
-    let feats = features::compute(&augmented.program()?, data, time, starts)?;
+    let feats = features::compute_from(&augmented.program()?, data, time, starts, time_on_s)?;
     let mut out = [FeatureRange { lo: 0.0, hi: 0.0 }; 2];
     let mut cols = Vec::with_capacity(2);
     for (k, range) in out.iter_mut().enumerate() {

@@ -360,7 +360,8 @@ pub fn closest(name: &str, names: &[String]) -> Option<String> {
 }
 
 /// Row indices where a new contiguous segment starts (always including 0): a step longer than
-/// `max(gap_s, 10 × median step)` is a gap. Stateful features (`rate`, `lag`) are reset there.
+/// `max(gap_s, 10 × median step)` is a gap, which the feature state is carried across (see
+/// [`crate::features`]).
 pub fn segments(time: &[f64], gap_s: Option<f64>) -> Vec<usize> {
     let mut starts = vec![0];
     if time.len() < 2 {

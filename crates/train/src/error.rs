@@ -179,6 +179,17 @@ pub enum TrainError {
         /// The end (s).
         until: String,
     },
+    /// `--power-on` after the first row read: the time on of that row would be negative.
+    #[error(
+        "--power-on {power_on} (spec key `power-on`) is after the first row read ({first} s): \
+         power-on must be at or before the start of the data"
+    )]
+    PowerOnAfterStart {
+        /// The power-on time given (s).
+        power_on: String,
+        /// The first row's time (s).
+        first: String,
+    },
     /// A name that is not one of the known ones (method, sensor, center selection).
     #[error("unknown {what} `{name}` (known: {known})")]
     Unknown {

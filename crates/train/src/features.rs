@@ -2,13 +2,17 @@
 //!
 //! Why: a second implementation of `rate`, `lag` or `hyst` on the host would train a model on
 //! numbers the IMU never sees. Here the user's expressions are compiled by `tcomp_core`'s
-//! [`ProgramBuilder`] and stepped sample by sample in f32 by its [`ProgramState`], with the state
-//! reset at every gap in the record (so a rate never spans a gap). Averaging into non-overlapping bins
-//! (the `--average` option) happens afterwards, on these features.
+//! [`ProgramBuilder`] and stepped sample by sample in f32 by its [`ProgramState`]. At a gap in the
+//! record (a logger dropout) the state is carried across by the core, as the board carries it
+//! across missed periods: `lag` and `rate` exactly for an input that moved linearly over the gap,
+//! or restarted when the gap is longer than the filters remember ([`gap_resets`]; the caller warns).
+//! `warmup`'s clock starts at the first row's time on ([`time_on_s`]). Averaging into
+//! non-overlapping bins (the `--average` option) happens afterwards, on these features.
 
 use crate::dataset::Dataset;
 use crate::error::TrainError;
 use serde::{Deserialize, Serialize};
+use tcomp_core::stream::gap_resets;
 use tcomp_core::{HOST_FEATURES, HOST_NODES, Program, ProgramBuilder, ProgramState};
 
 /// Features per model on the host.
@@ -81,23 +85,69 @@ pub fn input_columns<'d, const N2: usize, const F2: usize>(
         .collect()
 }
 
-/// Runs `program` over every row of `data` (f32, the core's code), resetting at each entry of
-/// `segment_starts`; returns one feature vector per row.
+/// The time since power-on of the first row of `time` (s): 0, or its distance from `power_on_s`
+/// (`--power-on`), which must not be after it.
+pub fn time_on_s(time: &[f64], power_on_s: Option<f64>) -> Result<f64, TrainError> {
+    let first = time.first().copied().unwrap_or(0.0);
+    match power_on_s {
+        None => Ok(0.0),
+        Some(p) if p <= first => Ok(first - p),
+        Some(p) => Err(TrainError::PowerOnAfterStart {
+            power_on: crate::options::num(p),
+            first: crate::options::num(first),
+        }),
+    }
+}
+
+/// The gaps among `segment_starts` (row indices where a segment starts, 0 first) across which
+/// `program`'s filters restart rather than carry on, as `(row, gap length s)`: longer than 5× its
+/// longest time constant (the core's [`gap_resets`]).
+pub fn restarting_gaps<const N2: usize, const F2: usize>(
+    program: &Program<'_, N2, F2>,
+    time: &[f64],
+    segment_starts: &[usize],
+) -> Vec<(usize, f64)> {
+    segment_starts
+        .iter()
+        .filter(|&&s| s > 0)
+        .filter_map(|&s| {
+            let gap = time.get(s)? - time.get(s - 1)?;
+            gap_resets(program, gap as f32).then_some((s, gap))
+        })
+        .collect()
+}
+
+/// Runs `program` over every row of `data` (f32, the core's code), each entry of `segment_starts`
+/// but the first a gap the core carries the state across (see the module doc), `warmup`'s clock
+/// starting at the first row; returns one feature vector per row.
 pub fn compute(
     program: &Program<'_, N, F>,
     data: &Dataset,
     time: &[f64],
     segment_starts: &[usize],
 ) -> Result<Vec<[f32; F]>, TrainError> {
+    compute_from(program, data, time, segment_starts, 0.0)
+}
+
+/// [`compute`] with `warmup`'s clock starting at `time_on_s` seconds since power-on on the first
+/// row ([`time_on_s`]).
+pub fn compute_from(
+    program: &Program<'_, N, F>,
+    data: &Dataset,
+    time: &[f64],
+    segment_starts: &[usize],
+    time_on_s: f64,
+) -> Result<Vec<[f32; F]>, TrainError> {
     let cols = input_columns(program, data)?;
     let mut state = ProgramState::<N>::new();
+    state.set_time_on(time_on_s as f32);
     let mut inputs = vec![0.0f32; cols.len()];
     let mut out = Vec::with_capacity(time.len());
     let mut next_seg = segment_starts.iter().peekable();
     for i in 0..time.len() {
-        if next_seg.peek().is_some_and(|&&s| s == i) {
+        let gap = next_seg.peek().is_some_and(|&&s| s == i);
+        if gap {
             next_seg.next();
-            state.reset();
         }
         for (v, c) in inputs.iter_mut().zip(&cols) {
             *v = c.get(i).copied().unwrap_or(f64::NAN) as f32;
@@ -108,8 +158,12 @@ pub fn compute(
             (time.get(i).copied().unwrap_or(0.0) - time.get(i - 1).copied().unwrap_or(0.0)) as f32
         };
         let mut x = [0.0f32; F];
-        state
-            .step(program, &inputs, dt)
+        let stepped = if gap {
+            state.step_gap(program, &inputs, dt)
+        } else {
+            state.step(program, &inputs, dt)
+        };
+        stepped
             .and_then(|()| state.features(program, &mut x))
             .map_err(|e| TrainError::Step {
                 at: format!("{}:{}", data.file(), data.line(i)),

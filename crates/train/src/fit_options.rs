@@ -53,6 +53,8 @@ pub struct FitOptions {
     pub select: CenterSelection,
     /// Gap threshold (s); default 10× the median step.
     pub gap_s: Option<f64>,
+    /// Time of power-on on the time column (s); default the first row read.
+    pub power_on_s: Option<f64>,
     /// k-means seed.
     pub seed: u64,
     /// Gradient iterations.
@@ -90,6 +92,7 @@ impl FitOptions {
             cubic: true,
             select: CenterSelection::Kmeans,
             gap_s: None,
+            power_on_s: None,
             seed: 1,
             iterations: 2000,
             sensor: SensorKind::Other,
@@ -127,6 +130,9 @@ impl FitOptions {
         }
         if let Some(g) = run.gap {
             self.gap_s = Some(options::GAP.check(g)?);
+        }
+        if let Some(p) = run.power_on {
+            self.power_on_s = Some(options::POWER_ON.check(p)?);
         }
         if let Some(f) = run.from {
             self.from = Some(options::FROM.check(f)?);

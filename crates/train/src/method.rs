@@ -31,8 +31,10 @@ pub const DEFAULT_CENTERS: usize = 16;
 pub struct TrainingSet {
     /// The selected rows (`--from/--until`).
     pub data: Dataset,
-    /// Row indices where a segment starts (feature state is reset there).
+    /// Row indices where a segment starts: 0, then the row after each gap.
     pub starts: Vec<usize>,
+    /// Time since power-on of the first row (s): where `warmup`'s clock starts.
+    pub time_on_s: f64,
     /// The averaging bins, as `(first row, end row)` ranges.
     pub bins: Vec<(usize, usize)>,
     /// The program stored in the blob.

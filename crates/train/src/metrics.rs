@@ -26,6 +26,8 @@ pub struct Roles {
     pub reference: Option<String>,
     /// Constant reference (used when there is no reference column).
     pub reference_value: Option<f64>,
+    /// Time of power-on on the time column (`warmup` counts from it); `None`: the first row.
+    pub power_on_s: Option<f64>,
 }
 
 impl Roles {
@@ -37,6 +39,7 @@ impl Roles {
             target: c.target.to_string(),
             reference: (!c.reference.is_empty()).then(|| c.reference.to_string()),
             reference_value: c.reference_value.map(f64::from),
+            power_on_s: None,
         }
     }
 
@@ -68,11 +71,15 @@ pub struct Run {
     pub out_of_range: usize,
     /// Samples flagged as input or model faults.
     pub faults: usize,
-    /// Gaps across which the channel was reset.
+    /// Gaps in the record (the feature state carried across them, or restarted).
     pub gaps: usize,
+    /// Those of the gaps that restarted the feature state (longer than 5× the program's longest
+    /// time constant), as `(row, gap length s)`.
+    pub restarted: Vec<(usize, f64)>,
 }
 
-/// Runs the model through a core [`Channel`] over `data`, resetting at gaps. `temperature` names the
+/// Runs the model through a core [`Channel`] over `data`, carrying the feature state across gaps
+/// as the board does across missed periods (see [`crate::features`]). `temperature` names the
 /// column used for segment detection (default: the program's first input).
 ///
 /// A model of at most [`crate::features::FLIGHT_FEATURES`] features runs in the firmware's
@@ -122,18 +129,20 @@ pub fn run_at_capacity<const C2: usize, const F2: usize, const N2: usize>(
     };
     let starts = segments(time, gap_s);
     let mut ch = Channel::<N2, F2>::new(1.0);
+    ch.set_time_on(crate::features::time_on_s(time, roles.power_on_s)? as f32);
     let mut inputs = vec![0.0f32; cols.len()];
     let mut run = Run {
         time: time.to_vec(),
         temperature: temp,
         gaps: starts.len().saturating_sub(1),
+        restarted: crate::features::restarting_gaps(&model.program, time, &starts),
         ..Run::default()
     };
     let mut next = starts.iter().peekable();
     for i in 0..time.len() {
         if next.peek().is_some_and(|&&s| s == i) {
             next.next();
-            ch.reset();
+            ch.mark_gap();
         }
         for (v, c) in inputs.iter_mut().zip(&cols) {
             *v = c.get(i).copied().unwrap_or(f64::NAN) as f32;
@@ -241,8 +250,10 @@ pub struct EvalReport {
     pub out_of_range_pct: f64,
     /// Samples flagged as input faults (and model faults: a non-finite correction).
     pub input_faults: usize,
-    /// Gaps where the channel was reset.
+    /// Gaps in the record (the feature state carried across them, or restarted).
     pub gaps: usize,
+    /// Gaps that restarted the feature state (longer than 5× the program's longest time constant).
+    pub gaps_restarted: usize,
 }
 
 /// Computes the report of a run with bins of `bin_s` seconds.
@@ -274,6 +285,7 @@ pub fn report(run: &Run, bin_s: f64) -> EvalReport {
         out_of_range_pct: 100.0 * run.out_of_range as f64 / run.time.len().max(1) as f64,
         input_faults: run.faults,
         gaps: run.gaps,
+        gaps_restarted: run.restarted.len(),
     }
 }
 

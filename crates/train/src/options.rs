@@ -272,7 +272,7 @@ pub const BIN: Bound = interval("--bin", "", "the length of the bins of the binn
 pub const GAP: Bound = interval(
     "--gap",
     "gap",
-    "steps longer than this are gaps where feature state is reset",
+    "steps longer than this are gaps, across which feature state is carried or restarted",
 );
 
 /// `--centers` of `mse` and `gradient`: at least one Gaussian (with none, the model is the
@@ -318,6 +318,17 @@ pub const ITERATIONS: Bound = Bound {
 pub const FROM: Bound = Bound {
     flag: "--from",
     key: "from",
+    min: -1e10,
+    min_exclusive: false,
+    max: 1e10,
+    unit: "s",
+    why: "a time of the record's time column, from its start or the Unix epoch",
+};
+
+/// `--power-on`: a time of the record's time column, as `--from`.
+pub const POWER_ON: Bound = Bound {
+    flag: "--power-on",
+    key: "power-on",
     min: -1e10,
     min_exclusive: false,
     max: 1e10,

@@ -97,7 +97,8 @@ impl FitMethod for Poly3 {
             features: vec![expr.clone()],
         };
         let time = data.time(&opts.time)?;
-        let t = features::compute(&probe.program()?, data, time, starts)?;
+        let time_on = features::time_on_s(time, opts.power_on_s)?;
+        let t = features::compute_from(&probe.program()?, data, time, starts, time_on)?;
         let (lo, hi) = t
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), r| {

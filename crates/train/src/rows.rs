@@ -1,7 +1,7 @@
 //! From a dataset and fit options to the rows a method is fitted on ([`TrainingSet`]).
 //!
 //! Why apart from [`crate::train`]: this is everything the methods share before they differ —
-//! select the window, compute the error against the reference, split at gaps, refuse a fit over
+//! select the window, compute the error against the reference, find the gaps, refuse a fit over
 //! the memory budget, let the method rewrite the program, run the core's feature program over
 //! every row, refuse constant or collinear features, record the ranges and average into bins —
 //! and benchmarks reach it alone through [`training_rows`].
@@ -112,6 +112,7 @@ fn select(data: &Dataset, opts: &FitOptions) -> Result<Selection, TrainError> {
         target: opts.target.clone(),
         reference: opts.reference.clone(),
         reference_value,
+        power_on_s: opts.power_on_s,
     };
     let reference = roles.reference_series(&data)?;
     let error: Vec<f64> = target.iter().zip(&reference).map(|(a, b)| a - b).collect();
@@ -162,10 +163,11 @@ fn feature_columns(
     data: &Dataset,
     time: &[f64],
     starts: &[usize],
+    time_on_s: f64,
 ) -> Result<(Vec<Vec<f64>>, Vec<FeatureRange>), TrainError> {
     let program = spec.program()?;
     let nf = program.n_features();
-    let feats = features::compute(&program, data, time, starts)?;
+    let feats = features::compute_from(&program, data, time, starts, time_on_s)?;
     let columns: Vec<Vec<f64>> = (0..nf)
         .map(|k| {
             feats
@@ -224,20 +226,14 @@ pub(crate) fn prepare(
     } = select(data, opts)?;
     let time = data.time(&opts.time)?;
     let starts = segments(time, opts.gap_s);
-    for &s in starts.iter().skip(1) {
-        let gap = time.get(s).copied().unwrap_or(0.0) - time.get(s - 1).copied().unwrap_or(0.0);
-        warnings.push(format!(
-            "{}:{}: gap of {gap:.3} s; feature state (rate, lag) reset there",
-            data.file(),
-            data.line(s)
-        ));
-    }
+    let time_on_s = features::time_on_s(time, opts.power_on_s)?;
     check_options(opts, method)?;
     let average_s = averaging(opts, &data, time)?;
     let b = bins(time, average_s);
     check_memory(opts, time, b.len(), &data)?;
     let spec = method.program(opts, &data, &starts, &mut warnings)?;
-    let (columns, ranges) = feature_columns(&spec, &data, time, &starts)?;
+    gap_warnings(&spec, &data, time, &starts, &mut warnings)?;
+    let (columns, ranges) = feature_columns(&spec, &data, time, &starts, time_on_s)?;
     // Too few rows is said as such (after any bad cell they hold), before a feature over them
     // looks constant.
     check_samples(method, opts, &data, time.len(), " (rows)".to_string())?;
@@ -254,6 +250,7 @@ pub(crate) fn prepare(
     let set = TrainingSet {
         data,
         starts,
+        time_on_s,
         bins: b,
         spec,
         ranges,
@@ -268,6 +265,41 @@ pub(crate) fn prepare(
             average_s,
         },
     ))
+}
+
+/// The gaps of the record: one line for those the feature state is carried across, one per gap
+/// that restarts it (longer than 5× the program's longest time constant), naming the row.
+fn gap_warnings(
+    spec: &FeatureSpec,
+    data: &Dataset,
+    time: &[f64],
+    starts: &[usize],
+    warnings: &mut Vec<String>,
+) -> Result<(), TrainError> {
+    let gaps = starts.len().saturating_sub(1);
+    if gaps == 0 {
+        return Ok(());
+    }
+    let program = spec.program()?;
+    let restarting = features::restarting_gaps(&program, time, starts);
+    let carried = gaps - restarting.len();
+    if carried > 0 {
+        warnings.push(format!(
+            "{}: {carried} gap(s) in the record; feature state (rate, lag, hyst) carried across \
+             them as for inputs moving linearly",
+            data.file()
+        ));
+    }
+    let longest = program.longest_time_constant();
+    for (s, gap) in restarting {
+        warnings.push(format!(
+            "{}:{}: gap of {gap:.3} s, longer than 5 × the longest time constant ({longest} s); \
+             feature state (rate, lag, hyst) reset there",
+            data.file(),
+            data.line(s)
+        ));
+    }
+    Ok(())
 }
 
 /// What `prepare` resolved besides the training set.

@@ -22,7 +22,7 @@
 use crate::error::TrainError;
 use crate::layer::Layer;
 use crate::options::{
-    AVERAGE, CENTERS_BAYES, FROM, GAP, ITERATIONS, REFERENCE_VALUE, UNTIL, parse_seed,
+    AVERAGE, CENTERS_BAYES, FROM, GAP, ITERATIONS, POWER_ON, REFERENCE_VALUE, UNTIL, parse_seed,
 };
 use serde::Deserialize;
 use std::path::Path;
@@ -46,10 +46,15 @@ crate::layer! {
         /// Use only rows with time < this (s).
         #[arg(long, allow_negative_numbers = true, value_parser = UNTIL.parser())]
         pub until: Option<f64>,
-        /// Steps longer than this (s) are gaps, where feature state is reset [default: 10× the
-        /// median step].
+        /// Steps longer than this (s) are gaps: rate and lag are carried across as for an input
+        /// moving linearly, or restarted (with a warning) when the gap is longer than 5× the
+        /// program's longest time constant [default: 10× the median step].
         #[arg(long, allow_negative_numbers = true, value_parser = GAP.parser())]
         pub gap: Option<f64>,
+        /// Time (s, on the time column) the instrument was switched on: `warmup(τ)` counts from
+        /// here [default: the first row read].
+        #[arg(long, allow_negative_numbers = true, value_parser = POWER_ON.parser())]
+        pub power_on: Option<f64>,
     }
 }
 

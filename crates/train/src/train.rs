@@ -2,8 +2,8 @@
 //!
 //! Why here and not in the CLI: tests and benchmarks call exactly what `tcomp fit` runs. This module
 //! only orchestrates; what differs between methods is the method's ([`crate::method::FitMethod`]).
-//! The steps: select the window and check the column roles and time, split at gaps (warn; feature
-//! state is reset there), let the method rewrite the program (poly3), run the core's feature
+//! The steps: select the window and check the column roles and time, find the gaps (warn; feature
+//! state is carried across them, or restarted after a long one), let the method rewrite the program (poly3), run the core's feature
 //! program over every row, check that features vary and are not collinear, record their ranges,
 //! average into bins (`average_s`, default [`DEFAULT_AVERAGE_S`]), let the method fit in f64, store
 //! f32 coefficients, then decode the blob and run it through the core's `Channel` over the
@@ -189,7 +189,11 @@ fn measure(
 ) -> Result<EvalReport, TrainError> {
     let bytes = model.to_bytes()?;
     let decoded = crate::blob_io::decode(std::path::Path::new("<new model>"), &bytes)?;
-    let run = metrics::run_model(&decoded, data, &Roles::of_model(&decoded), None, opts.gap_s)?;
+    let roles = Roles {
+        power_on_s: opts.power_on_s,
+        ..Roles::of_model(&decoded)
+    };
+    let run = metrics::run_model(&decoded, data, &roles, None, opts.gap_s)?;
     Ok(metrics::report(&run, REPORT_BIN_S))
 }
 

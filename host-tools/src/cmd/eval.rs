@@ -88,10 +88,12 @@ fn print_report(r: &EvalReport, unit: &str) {
         pct(f.binned.change_pct)
     );
     outln!(
-        "out of range     {} % of samples; input faults {}; gaps {}",
+        "out of range     {} % of samples; input faults {}; gaps {} ({} restarted the \
+         feature state)",
         plain(r.out_of_range_pct, 3),
         r.input_faults,
-        r.gaps
+        r.gaps,
+        r.gaps_restarted
     );
     if !r.segments.is_empty() {
         outln!();

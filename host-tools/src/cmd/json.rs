@@ -133,8 +133,10 @@ pub struct RunFigures {
     pub out_of_range_pct: Option<f64>,
     /// Samples flagged as input or model faults.
     pub input_faults: usize,
-    /// Gaps where the channel was reset.
+    /// Gaps in the run (the feature state carried across).
     pub gaps: usize,
+    /// Gaps long enough that the feature state restarted.
+    pub gaps_restarted: usize,
 }
 
 impl From<&EvalReport> for RunFigures {
@@ -170,6 +172,7 @@ impl From<&EvalReport> for RunFigures {
             out_of_range_pct: figure(r.out_of_range_pct, any),
             input_faults: r.input_faults,
             gaps: r.gaps,
+            gaps_restarted: r.gaps_restarted,
         }
     }
 }

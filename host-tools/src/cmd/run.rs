@@ -1,5 +1,5 @@
 //! `RunArgs`: the run a command reads — `--data`, and the trainer's [`RunOptions`] (`--reference`,
-//! `--reference-value`, `--from/--until`, `--gap`) — flattened into `fit`, `eval`, `diagnose`,
+//! `--reference-value`, `--from/--until`, `--gap`, `--power-on`) — flattened into `fit`, `eval`, `diagnose`,
 //! `compare` and `report`.
 //!
 //! Why one struct: these flags were declared once per command, with drifting help texts, bounds
@@ -53,6 +53,7 @@ impl RunArgs {
     /// column, as in `fit`).
     pub fn roles(&self, model: &HostModel<'_>) -> Roles {
         let mut roles = Roles::of_model(model);
+        roles.power_on_s = self.run.power_on;
         if let Some(r) = &self.run.reference {
             roles.reference = Some(r.clone());
         }

@@ -88,7 +88,7 @@ impl<const N: usize, const F: usize, S: Real> Parser<'_, '_, N, F, S> {
         Ok(acc)
     }
 
-    /// The function's parameters (arguments after the first): constants, removed from the program
+    /// The function's parameters (the arguments after its operand, if it has one): constants, removed from the program
     /// last first (the last constant is the last node), defaults for those left out, each checked
     /// against its domain in order.
     fn params(
@@ -98,9 +98,10 @@ impl<const N: usize, const F: usize, S: Real> Parser<'_, '_, N, F, S> {
         start: usize,
     ) -> Result<[S; MAX_PARAMS], ParseError> {
         let mut values = [S::ZERO; MAX_PARAMS];
+        let first = function.first_param();
         for (i, p) in function.params.iter().enumerate().rev() {
-            let value = match (args.get(i + 1), p.default) {
-                (Some(_), _) | (None, None) => self.param(args, i + 1)?,
+            let value = match (args.get(i + first), p.default) {
+                (Some(_), _) | (None, None) => self.param(args, i + first)?,
                 (None, Some(default)) => S::from_f32(default),
             };
             if let Some(v) = values.get_mut(i) {
@@ -113,7 +114,7 @@ impl<const N: usize, const F: usize, S: Real> Parser<'_, '_, N, F, S> {
                 let whole = (start, self.pos);
                 let (s, e) = match p.domain {
                     Domain::NotBelowPrevious => whole,
-                    _ => args.get(i + 1).map_or(whole, |a| (a.1, a.2)),
+                    _ => args.get(i + first).map_or(whole, |a| (a.1, a.2)),
                 };
                 return Err(self.err_at(s, e, ParseErrorKind::BadParameter));
             }

@@ -12,6 +12,7 @@
 //! registry, and its name in [`EffectKind`] (the core's vocabulary, which the diagnosis shares).
 
 mod context;
+mod pair;
 mod text;
 
 use serde::{Deserialize, Serialize};
@@ -143,6 +144,9 @@ registry! {
     Hysteresis => hysteresis::Hysteresis,
     Warmup => warmup::Warmup,
     SupplyVoltage => supply_voltage::SupplyVoltage,
+    GradientRate => gradient_rate::GradientRate,
+    GradientLag => gradient_lag::GradientLag,
+    TempGradientProduct => temp_gradient_product::TempGradientProduct,
 }
 
 /// Whether the simulator simulates effects of `kind`.

@@ -1,5 +1,10 @@
-//! `c·exp(−(t − t_first)/tau)`: the warm-up transient after power-on, written exactly with the time
-//! column as `1 - (time_s - lag(time_s, tau)) / D`, `D = dt·e^(−dt/τ)/(1 − e^(−dt/τ))`.
+//! `c·warmup(tau)` = `c·exp(−t_on/tau)`: the warm-up transient after power-on, written with the
+//! language's `warmup(τ)`, whose clock is the time since power-on: the board counts it from its
+//! boot, the host from the file's first row unless told otherwise (`--power-on`). The simulator's
+//! power-on is the first row's time, so the truth holds with the host's default.
+//!
+//! (Before `warmup` existed, the truth spelled the same transient through the time column,
+//! `1 - (time_s - lag(time_s, tau)) / D`: exact, but the board has no time column.)
 
 use serde::{Deserialize, Serialize};
 use tcomp_core::{EffectKind, SensorKind};
@@ -8,10 +13,8 @@ use super::context::RowInputs;
 use super::text::{check_finite, check_pos, num};
 use super::{Context, EffectModel, EffectState, EffectTruth, Terms, per_sensor};
 use crate::error::Result;
-use super::LagFilter as Lag;
 
-/// `c·exp(−(t − t_first)/tau)`: a warm-up transient, written exactly as
-/// `1 - (time_s - lag(time_s, tau)) / D` with `D = dt·e^(−dt/τ)/(1 − e^(−dt/τ))`.
+/// `c·exp(−t_on/tau)`, `t_on` the seconds since the first row: written `warmup(tau)`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Warmup {
@@ -21,30 +24,17 @@ pub struct Warmup {
     pub tau_s: f64,
 }
 
-/// The constant `D = dt·e^(−dt/τ)/(1 − e^(−dt/τ))` of the warm-up expression.
-pub(crate) fn warmup_d(dt: f64, tau_s: f64) -> f64 {
-    let e = (-dt / tau_s).exp();
-    dt * e / (1.0 - e)
-}
-
 struct State {
     coefficient: f64,
-    d: f64,
-    lag: Lag,
+    tau_s: f64,
+    first: Option<f64>,
 }
 
 impl EffectState for State {
-    fn step(&mut self, row: &RowInputs<'_>, dt: f64) -> f64 {
-        let l = self.lag.step(row.time_s, dt);
-        self.coefficient * (1.0 - (row.time_s - l) / self.d)
+    fn step(&mut self, row: &RowInputs<'_>, _dt: f64) -> f64 {
+        let t0 = *self.first.get_or_insert(row.time_s);
+        self.coefficient * (-(row.time_s - t0) / self.tau_s).exp()
     }
-}
-
-/// `1 - (time_s - lag(time_s, tau)) / D`.
-fn expression(tau_s: f64, d: f64) -> String {
-    use tcomp_core::expr::{self, Expr};
-    let time = || expr::name("time_s");
-    (Expr::num(1.0) - (time() - expr::lag(time(), tau_s)) / Expr::num(d)).to_string()
 }
 
 impl EffectModel for Warmup {
@@ -62,23 +52,23 @@ impl EffectModel for Warmup {
         check_pos(self.tau_s, format!("{at}.tau_s"))
     }
 
-    fn state(&self, _ctx: &Context<'_>, dt: f64) -> Result<Box<dyn EffectState>> {
+    fn state(&self, _ctx: &Context<'_>, _dt: f64) -> Result<Box<dyn EffectState>> {
         Ok(Box::new(State {
             coefficient: self.coefficient,
-            d: warmup_d(dt, self.tau_s),
-            lag: Lag::new(self.tau_s),
+            tau_s: self.tau_s,
+            first: None,
         }))
     }
 
-    fn truth(&self, ctx: &Context<'_>, dt: f64) -> EffectTruth {
+    fn truth(&self, ctx: &Context<'_>, _dt: f64) -> EffectTruth {
         Terms::single(
             self.coefficient,
             ctx.unit.to_string(),
-            expression(self.tau_s, warmup_d(dt, self.tau_s)),
+            tcomp_core::expr::warmup(self.tau_s).to_string(),
             format!(
-                "warm-up transient c * exp(-(t - t_first)/{} s), written with the time column (exact at this file's step of {} s)",
-                num(self.tau_s),
-                num(dt)
+                "warm-up transient c * exp(-t_on/{} s), t_on the seconds since power-on at the \
+                 first row (the host's default for --power-on)",
+                num(self.tau_s)
             ),
         )
         .into_truth(Self::KIND)

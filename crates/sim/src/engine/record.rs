@@ -55,6 +55,7 @@ pub(super) fn truth(
         bias_p2p: bias.p2p(),
         noise: noise_truth(sc, grid.h, drawn),
         operators: crate::truth::operator_definitions(),
+        dropouts: sc.dropouts.clone(),
         notes: vec![
             "error = target - reference = sum of effects + noise".into(),
             "each effect = offset + sum(coefficients[i] * expressions[i]), evaluated over this file's columns with the operators listed, dt = step_s; exact up to float rounding".into(),
