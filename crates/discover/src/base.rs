@@ -46,6 +46,8 @@ pub struct Prepared {
     pub(crate) n_linear: usize,
     pub(crate) base: GroupFit,
     heldout: HeldOut,
+    /// Gap threshold (s) of the feature computation.
+    pub(crate) gap_s: Option<f64>,
     /// Base figures.
     pub figures: BaseFigures,
 }
@@ -152,6 +154,7 @@ pub fn prepare(
         n_linear: d,
         base,
         heldout,
+        gap_s: opts.gap_s,
         figures: BaseFigures::default(),
     };
     p.figures = base_figures(&p, opts, tr.rbf.centers.len())?;

@@ -4,48 +4,118 @@
 //!
 //! Why generated, not hand-listed: on a user's own data nobody knows the answer in advance, so every
 //! plausible mechanism is put to the same test. For each temperature (the model's signals and every
-//! thermometer column): its rate, the Shupe-type product T·dT/dt, its square, a lag with the time
-//! constant searched over a grid (a sensing element that lags its thermometer), and a
-//! heating/cooling hysteresis state with the threshold searched; for every pair or triple of
-//! thermometers, their differences (thermal gradients); and every other numeric column (supply
-//! voltage, other channels) as a non-thermal input. A *family* is one hypothesis with a searched
-//! parameter (τ, threshold, rate window); its members are scored individually and the family's
-//! evidence is marginalised over the grid, so searching more values does not buy evidence.
+//! thermometer column): its rate, the Shupe-type product T·dT/dt, its square, a lag (a sensing
+//! element that lags its thermometer) both added beside the model's features and *replacing* the
+//! temperature in every one of them, and a heating/cooling hysteresis state; for every pair or
+//! triple of thermometers, their differences (thermal gradients), a gradient's rate, its lag and
+//! its product with the temperature; the warm-up after power-on (`warmup(τ)`, when the core's
+//! language has it); and every other numeric column (supply voltage, other channels) as a
+//! non-thermal input. A *family* is one hypothesis with a parameter (τ, threshold, rate window);
+//! its grid members are scored individually and the family's evidence is marginalised over the
+//! grid, so searching more values does not buy evidence; [`crate::param`] then estimates the
+//! parameter of the leading families on a continuous scale ([`crate::families`] builds a member at
+//! any value).
+//!
+//! Every expression is written with the names the user's program has (the model's signals as the
+//! user defined them and the file's columns), never a signal the trainer added to the stored
+//! program (see [`crate::program`]), so each one is accepted by `tcomp fit --feature` as printed.
+//! A candidate that only re-states a feature the model has (its rate with another window) is
+//! marked as a refinement of that feature ([`Candidate::refines`]), not a missing effect.
 
+use crate::families::{Template, existing_rate, kind_named, language_has};
+use crate::program;
 use serde::Serialize;
 use tcomp_core::expr::{self, Expr};
 use tcomp_core::parse::is_identifier;
 use tcomp_train::Dataset;
 
-/// Lag time constants searched (s).
+pub use crate::families::Search;
+
+/// Lag time constants of the scoring grid (s); [`crate::param`] then searches `LAG_RANGE_S`.
 pub const LAG_TAUS_S: [f64; 6] = [300.0, 600.0, 1200.0, 2400.0, 4800.0, 9600.0];
+/// The range a lag's τ is searched over (s).
+pub const LAG_RANGE_S: (f64, f64) = (120.0, 20_000.0);
+/// Warm-up time constants of the scoring grid (s).
+pub const WARMUP_TAUS_S: [f64; 5] = [150.0, 300.0, 600.0, 1200.0, 2400.0];
+/// The range a warm-up's τ is searched over (s).
+pub const WARMUP_RANGE_S: (f64, f64) = (60.0, 7200.0);
 /// Hysteresis thresholds searched (temperature units per minute).
 pub const HYST_THRESHOLDS: [f64; 4] = [0.02, 0.05, 0.1, 0.2];
+/// The range a hysteresis threshold is searched over.
+pub const HYST_RANGE: (f64, f64) = (0.01, 0.4);
 /// Rate windows searched (s); 60 s is the core's default.
 pub const RATE_WINDOWS_S: [f64; 2] = [60.0, 240.0];
+/// The range a rate window is searched over (s).
+pub const RATE_RANGE_S: (f64, f64) = (30.0, 1200.0);
 
 /// The kind of physical effect a candidate stands for: the core's vocabulary, shared with the
 /// simulator (which hides effects of these kinds).
 pub use tcomp_core::EffectKind;
 
-/// One candidate: the features to add.
+/// One candidate: the features to add, or to put in place of some of the model's.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Candidate {
     /// Effect kind.
     pub kind: EffectKind,
     /// Physical name, e.g. "Shupe-type T·dT/dt of t_coil_c".
     pub effect: String,
-    /// Feature expressions to add (one, or two/three for gradient sets).
+    /// Feature expressions to add (one, or two/three for gradient sets), or to put in place of
+    /// `replaces`.
     pub expressions: Vec<String>,
-    /// The searched parameter: τ (s) for lags, threshold for hysteresis, window (s) for rates.
+    /// The searched parameter: τ (s) for lags and warm-up, threshold for hysteresis, window (s)
+    /// for rates.
     pub parameter: Option<f64>,
+    /// The model's features the expressions replace, in order (empty: they are added).
+    pub replaces: Vec<String>,
+    /// Set when the candidate only re-states a feature the model already has (its rate with
+    /// another window): a refinement of that feature, not a missing effect.
+    pub refines: Option<String>,
+}
+
+impl Candidate {
+    /// A candidate added beside the model's features.
+    pub fn added(kind: EffectKind, effect: String, expressions: Vec<String>, p: f64) -> Self {
+        Candidate {
+            kind,
+            effect,
+            expressions,
+            parameter: Some(p),
+            replaces: Vec::new(),
+            refines: None,
+        }
+    }
+
+    /// The feature list `features` with this candidate applied: each replaced feature swapped for
+    /// its new expression in place, the others appended.
+    pub fn applied_to(&self, features: &[String]) -> Vec<String> {
+        let mut out: Vec<String> = features.to_vec();
+        let mut extra = Vec::new();
+        for (k, e) in self.expressions.iter().enumerate() {
+            match self
+                .replaces
+                .get(k)
+                .and_then(|r| out.iter().position(|f| f == r))
+            {
+                Some(i) => {
+                    if let Some(slot) = out.get_mut(i) {
+                        slot.clone_from(e);
+                    }
+                }
+                None => extra.push(e.clone()),
+            }
+        }
+        out.extend(extra);
+        out
+    }
 }
 
 /// A hypothesis: candidates differing only in a searched parameter.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Family {
-    /// Members (one for a plain candidate).
+    /// Members scored (one for a plain candidate; the grid of a searched parameter).
     pub members: Vec<Candidate>,
+    /// How the parameter is searched beyond the grid (none for a plain candidate).
+    pub search: Option<Search>,
 }
 
 /// What candidates are built from.
@@ -127,95 +197,88 @@ pub fn sources(data: &Dataset, exclude: &[&str], signals: &[String]) -> Sources 
     s
 }
 
-fn num(v: f64) -> String {
-    let s = format!("{v}");
-    s.strip_suffix(".0").map(str::to_string).unwrap_or(s)
+/// A number as the expressions print it, without a trailing `.0`.
+pub(crate) fn num(v: f64) -> String {
+    Expr::num(v).to_string()
 }
 
-fn single(kind: EffectKind, effect: String, expr: Expr, parameter: Option<f64>) -> Family {
+fn single(kind: EffectKind, effect: String, exprs: Vec<Expr>) -> Family {
     Family {
         members: vec![Candidate {
             kind,
             effect,
-            expressions: vec![expr.to_string()],
-            parameter,
+            expressions: exprs.iter().map(Expr::to_string).collect(),
+            parameter: None,
+            replaces: Vec::new(),
+            refines: None,
         }],
+        search: None,
     }
 }
 
-/// Every candidate family for these sources, minus expressions the model already has.
+/// Every candidate family for these sources, minus expressions the model already has; `existing`
+/// are the model's features (as the user wrote them: see [`crate::program::user_spec`]).
 pub fn generate(src: &Sources, existing: &[String]) -> Vec<Family> {
     let norm = |e: &str| e.split_whitespace().collect::<String>();
     let have: Vec<String> = existing.iter().map(|e| norm(e)).collect();
     let mut out = Vec::new();
     for t in &src.temperatures {
-        temperature_families(t, &mut out);
+        temperature_families(t, existing, &mut out);
     }
     gradient_families(&src.thermometers, &mut out);
+    gradient_physics(src, &mut out);
+    if language_has("warmup") {
+        let (lo, hi) = WARMUP_RANGE_S;
+        out.push(Template::Warmup.family(&WARMUP_TAUS_S, lo, hi));
+    }
     input_families(&src.inputs, &mut out);
     for f in &mut out {
-        f.members
-            .retain(|m| !m.expressions.iter().any(|e| have.contains(&norm(e))));
+        f.members.retain(|m| {
+            m.expressions.iter().all(|e| !e.is_empty())
+                && !m.expressions.iter().any(|e| have.contains(&norm(e)))
+        });
     }
     out.retain(|f| !f.members.is_empty());
     out
 }
 
-/// The effects of one temperature: rate (several windows), Shupe-type product, curvature, lagged
-/// element (several time constants), heating/cooling hysteresis (several thresholds).
-fn temperature_families(t: &str, out: &mut Vec<Family>) {
+/// The effects of one temperature: rate (several windows; a refinement of the model's own rate
+/// when it has one), Shupe-type product, curvature, lagged element (added beside the model's
+/// features, and replacing the temperature in every one of them), heating/cooling hysteresis.
+fn temperature_families(t: &str, existing: &[String], out: &mut Vec<Family>) {
     let x = || expr::name(t);
-    out.push(Family {
-        members: RATE_WINDOWS_S
-            .iter()
-            .map(|&w| Candidate {
-                kind: EffectKind::Rate,
-                effect: format!("rate of temperature d{t}/dt (window {} s)", num(w)),
-                expressions: vec![expr::rate_window(x(), w).to_string()],
-                parameter: Some(w),
-            })
-            .collect(),
-    });
+    let (lo, hi) = RATE_RANGE_S;
+    let rate = Template::Rate {
+        of: t.to_string(),
+        existing: existing_rate(t, existing),
+    };
+    let windows: Vec<f64> = RATE_WINDOWS_S
+        .iter()
+        .copied()
+        .filter(|w| existing_rate(t, existing).is_none_or(|(_, w0)| *w != w0))
+        .collect();
+    out.push(rate.family(&windows, lo, hi));
     out.push(single(
         EffectKind::Shupe,
         format!("Shupe-type {t}·d{t}/dt"),
-        x() * expr::rate(x()),
-        None,
+        vec![x() * expr::rate(x())],
     ));
     out.push(single(
         EffectKind::Square,
         format!("curvature in temperature {t}²"),
-        expr::sq(x()),
-        None,
+        vec![expr::sq(x())],
     ));
-    out.push(Family {
-        members: LAG_TAUS_S
-            .iter()
-            .map(|&tau| Candidate {
-                kind: EffectKind::LaggedElement,
-                effect: format!(
-                    "sensing element lags its thermometer {t}, τ ≈ {} min",
-                    num((tau / 60.0).round())
-                ),
-                expressions: vec![expr::lag(x(), tau).to_string()],
-                parameter: Some(tau),
-            })
-            .collect(),
-    });
-    out.push(Family {
-        members: HYST_THRESHOLDS
-            .iter()
-            .map(|&h| Candidate {
-                kind: EffectKind::Hysteresis,
-                effect: format!(
-                    "heating/cooling hysteresis of {t} (switches at ±{} per min)",
-                    num(h)
-                ),
-                expressions: vec![expr::hyst(expr::rate(x()), h).to_string()],
-                parameter: Some(h),
-            })
-            .collect(),
-    });
+    let (lo, hi) = LAG_RANGE_S;
+    out.push(Template::Lag { of: t.to_string() }.family(&LAG_TAUS_S, lo, hi));
+    if existing.iter().any(|f| program::uses(f, t)) {
+        let replacing = Template::LagReplacing {
+            name: t.to_string(),
+            features: existing.to_vec(),
+        };
+        out.push(replacing.family(&LAG_TAUS_S, lo, hi));
+    }
+    let (lo, hi) = HYST_RANGE;
+    out.push(Template::Hyst { of: t.to_string() }.family(&HYST_THRESHOLDS, lo, hi));
 }
 
 /// `a - b` of two columns.
@@ -230,8 +293,7 @@ fn gradient_families(th: &[String], out: &mut Vec<Family>) {
             out.push(single(
                 EffectKind::Gradient,
                 format!("thermal gradient {a}−{b}"),
-                difference(a, b),
-                None,
+                vec![difference(a, b)],
             ));
         }
     }
@@ -242,17 +304,54 @@ fn gradient_families(th: &[String], out: &mut Vec<Family>) {
                 let (Some(a), Some(b), Some(r)) = (th.get(i), th.get(j), th.get(k)) else {
                     continue;
                 };
-                out.push(Family {
-                    members: vec![Candidate {
-                        kind: EffectKind::Gradient,
-                        effect: format!("thermal gradients {a}−{r} and {b}−{r}"),
-                        expressions: vec![
-                            difference(a, r).to_string(),
-                            difference(b, r).to_string(),
-                        ],
-                        parameter: None,
-                    }],
-                });
+                out.push(single(
+                    EffectKind::Gradient,
+                    format!("thermal gradients {a}−{r} and {b}−{r}"),
+                    vec![difference(a, r), difference(b, r)],
+                ));
+            }
+        }
+    }
+}
+
+/// What a gradient does besides being there: its rate (a gradient that changes drives the bias,
+/// as heat flows through the block), its lag (the gradient reaches the sensing element late),
+/// and its product with the temperature (a gradient's effect that grows with temperature). The
+/// temperature of the products is the model's own (its signals), else the first thermometer.
+fn gradient_physics(src: &Sources, out: &mut Vec<Family>) {
+    let th = &src.thermometers;
+    let signals: Vec<&String> = src
+        .temperatures
+        .iter()
+        .filter(|t| !th.contains(t))
+        .collect();
+    let temps: Vec<&String> = if signals.is_empty() {
+        th.first().into_iter().collect()
+    } else {
+        signals
+    };
+    let (lo, hi) = LAG_RANGE_S;
+    for (i, a) in th.iter().enumerate() {
+        for b in th.iter().skip(i + 1) {
+            out.push(single(
+                kind_named("gradient_rate", EffectKind::Gradient),
+                format!("rate of the thermal gradient d({a}−{b})/dt"),
+                vec![expr::rate(difference(a, b))],
+            ));
+            let lagged = Template::GradientLag {
+                a: a.clone(),
+                b: b.clone(),
+            };
+            out.push(lagged.family(&LAG_TAUS_S, lo, hi));
+            for t in &temps {
+                if *t == a || *t == b {
+                    continue;
+                }
+                out.push(single(
+                    kind_named("temp_gradient_product", EffectKind::Gradient),
+                    format!("temperature × thermal gradient {t}·({a}−{b})"),
+                    vec![expr::name(t) * difference(a, b)],
+                ));
             }
         }
     }
@@ -266,7 +365,7 @@ fn input_families(inputs: &[String], out: &mut Vec<Family>) {
         } else {
             format!("non-thermal input {c}")
         };
-        out.push(single(EffectKind::NonThermal, effect, expr::name(c), None));
+        out.push(single(EffectKind::NonThermal, effect, vec![expr::name(c)]));
     }
 }
 

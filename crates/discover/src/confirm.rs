@@ -12,9 +12,15 @@
 //! of the training run in turn, predicted by a fit on the rest (the time gap resets the feature
 //! state), the blocks' binned residual variances pooled — and then the candidate must also lower the
 //! residual in a majority of the blocks, so one block's drift cannot carry it.
+//!
+//! Before those refits, the parameter of each leading family (a lag's τ, a window, a threshold) is
+//! estimated on a continuous scale by the refits' evidence on the training run ([`crate::param`]),
+//! with contiguous blocks of the training run deciding where that evidence is flat — the
+//! held-out run is never used to choose. A candidate that replaces some of the model's features
+//! (a lag of T in place of T) is refitted with the replaced feature set. Each confirmed candidate
+//! also carries the Δ log evidence of the real refits, which ranks the candidates that pass.
 
-use crate::candidates::Candidate;
-use crate::score::Scored;
+use crate::score::{Prepared, Scored};
 use crate::{ModelInfo, Result};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -75,10 +81,16 @@ pub struct Confirmation {
     pub splits_improved: usize,
     /// Held-out blocks.
     pub splits: usize,
+    /// Δ log evidence of the trainer's refits on the whole training run: with the candidate
+    /// minus without.
+    pub delta_log_evidence_refit: f64,
 }
 
 /// Pooled held-out residual std and the one of each split.
 type HeldOutFigures = (f64, Vec<f64>);
+
+/// A refit's held-out figures and its log evidence on the whole training run.
+type Refitted = (HeldOutFigures, f64);
 
 /// One train/test split.
 struct Split {
@@ -87,79 +99,102 @@ struct Split {
     bin_s: f64,
 }
 
-/// The trainer's options for the model's features plus `extra`.
-fn refit_options(info: &ModelInfo, roles: &Roles, extra: &[String]) -> FitOptions {
-    let mut o = FitOptions::new(&roles.target, &[]);
-    o.time.clone_from(&roles.time);
-    o.reference.clone_from(&roles.reference);
-    o.reference_value = roles.reference_value;
-    o.spec.signals.clone_from(&info.spec.signals);
-    o.spec.features.clone_from(&info.spec.features);
-    o.spec.features.extend(extra.iter().cloned());
-    o
+/// What every refit shares: the model, its roles, the training run and the gap threshold.
+pub(crate) struct Refits<'a> {
+    info: &'a ModelInfo,
+    roles: &'a Roles,
+    data: &'a Dataset,
+    gap_s: Option<f64>,
 }
 
-/// Log evidence of the trainer's refit on the whole training run (−∞ when it fails).
-fn refit_log_evidence(info: &ModelInfo, roles: &Roles, data: &Dataset, extra: &[String]) -> f64 {
-    tcomp_train::fit(data, &refit_options(info, roles, extra))
-        .ok()
-        .and_then(|f| f.summary.details.evidence.map(|e| e.log_evidence))
-        .unwrap_or(f64::NEG_INFINITY)
-}
-
-/// Re-chooses a family's parameter (a lag's τ, a threshold, a window) among the scoring's best
-/// member and its grid neighbours by the log evidence of the real refits on the training run — the
-/// training data alone, as everywhere the parameter is chosen. Why: scoring holds the base model's
-/// Gaussians fixed, and they absorb part of a slow effect, which biases τ short (the hidden lag of
-/// 40 min scored best at 20 min; the refits' evidence prefers 40 min, and the held-out residual
-/// after adding it is 1.05× the noise floor instead of 1.26×).
-fn rechoose_parameter(info: &ModelInfo, roles: &Roles, data: &Dataset, c: &mut Scored) {
-    if c.neighbours.is_empty() {
-        return;
+impl<'a> Refits<'a> {
+    /// The refits of the model `info` with `roles` on `data`, gaps above `gap_s`.
+    pub(crate) fn new(
+        info: &'a ModelInfo,
+        roles: &'a Roles,
+        data: &'a Dataset,
+        gap_s: Option<f64>,
+    ) -> Self {
+        Refits {
+            info,
+            roles,
+            data,
+            gap_s,
+        }
     }
-    let mut options: Vec<Candidate> = vec![Candidate {
-        kind: c.kind,
-        effect: c.effect.clone(),
-        expressions: c.expressions.clone(),
-        parameter: c.parameter,
-    }];
-    options.extend(c.neighbours.iter().cloned());
-    let evidences: Vec<f64> = options
-        .par_iter()
-        .map(|m| refit_log_evidence(info, roles, data, &m.expressions))
-        .collect();
-    let best = evidences
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .map_or(0, |(i, _)| i);
-    if best > 0
-        && let Some(m) = options.get(best)
-    {
-        c.parameter_scored = c.parameter;
+
+    /// The trainer's options for the feature list `features` (the model's signals kept).
+    pub(crate) fn options(&self, features: &[String]) -> FitOptions {
+        let mut o = FitOptions::new(&self.roles.target, &[]);
+        o.time.clone_from(&self.roles.time);
+        o.reference.clone_from(&self.roles.reference);
+        o.reference_value = self.roles.reference_value;
+        o.gap_s = self.gap_s;
+        o.spec.signals.clone_from(&self.info.spec.signals);
+        o.spec.features = features.to_vec();
+        o
+    }
+
+    /// The model's features with the scored candidate `c` applied (none: the model's own).
+    fn features(&self, c: Option<&Scored>) -> Vec<String> {
+        match c {
+            Some(c) => c.candidate().applied_to(&self.info.spec.features),
+            None => self.info.spec.features.clone(),
+        }
+    }
+
+    /// Log evidence of the trainer's refit of `features` on the whole training run (−∞ when it
+    /// fails).
+    fn log_evidence(&self, features: &[String]) -> f64 {
+        tcomp_train::fit(self.data, &self.options(features))
+            .ok()
+            .and_then(|f| f.summary.details.evidence.map(|e| e.log_evidence))
+            .unwrap_or(f64::NEG_INFINITY)
+    }
+
+    /// Estimates the parameter of a searched candidate (see [`crate::param`]) and moves the
+    /// candidate to the estimate.
+    fn estimate(&self, c: &mut Scored, prepared: &Prepared, blocks: &[Split]) {
+        let Some(search) = c.search.clone() else {
+            return;
+        };
+        let features = &self.info.spec.features;
+        let evidence = |p: f64| {
+            crate::surrogate::log_evidence(prepared, &search.template.member(p).applied_to(features))
+        };
+        let heldout = |p: f64| {
+            heldout_std(self, blocks, &search.template.member(p).applied_to(features))
+                .ok()
+                .map(|r| r.0)
+        };
+        let Some(est) = crate::param::estimate(&search, &evidence, &heldout) else {
+            return;
+        };
+        let m = search.template.member(est.value);
+        if m.expressions != c.expressions {
+            c.parameter_scored = c.parameter;
+        }
         c.expression = m.expressions.first().cloned().unwrap_or_default();
-        c.expressions.clone_from(&m.expressions);
-        c.effect.clone_from(&m.effect);
+        c.expressions = m.expressions;
+        c.effect = m.effect;
         c.parameter = m.parameter;
+        c.replaces = m.replaces;
+        c.refines = m.refines;
+        c.estimate = Some(est);
     }
 }
 
-/// Held-out residual std (binned) of a fit of the model's features plus `extra`: pooled over the
-/// splits as the root of the bin-weighted mean variance, and per split.
-fn heldout_std(
-    info: &ModelInfo,
-    roles: &Roles,
-    splits: &[Split],
-    extra: &[String],
-) -> Result<HeldOutFigures> {
-    let o = refit_options(info, roles, extra);
+/// Held-out residual std (binned) of a fit of `features`: pooled over the splits as the root of
+/// the bin-weighted mean variance, and per split.
+fn heldout_std(r: &Refits<'_>, splits: &[Split], features: &[String]) -> Result<HeldOutFigures> {
+    let o = r.options(features);
     let (mut sum, mut count) = (0.0f64, 0usize);
     let mut each = Vec::with_capacity(splits.len());
     for sp in splits {
         let fitted = tcomp_train::fit(&sp.train, &o)?;
         let bytes = fitted.model.to_bytes()?;
         let model = tcomp_train::blob_io::decode(Path::new("<refit>"), &bytes)?;
-        let run = metrics::run_model(&model, &sp.test, &Roles::of_model(&model), None, None)?;
+        let run = metrics::run_model(&model, &sp.test, &Roles::of_model(&model), None, r.gap_s)?;
         let b = metrics::report(&run, sp.bin_s).binned;
         sum += b.residual_std.powi(2) * b.bins as f64;
         count += b.bins;
@@ -198,22 +233,8 @@ fn without(data: &Dataset, time: &[f64], lo: f64, hi: f64) -> Dataset {
     )
 }
 
-fn splits(
-    roles: &Roles,
-    data: &Dataset,
-    verify: Option<&Dataset>,
-    opts: &ConfirmOptions,
-) -> Result<(Vec<Split>, String)> {
-    if let Some(v) = verify {
-        let bin_s =
-            tcomp_train::features::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
-        let split = Split {
-            train: data.clone(),
-            test: v.clone(),
-            bin_s,
-        };
-        return Ok((vec![split], format!("verification run {}", v.file())));
-    }
+/// Contiguous blocks of the training run, each predicted by a fit on the rest.
+fn training_blocks(roles: &Roles, data: &Dataset, opts: &ConfirmOptions) -> Result<Vec<Split>> {
     let t = data.time(&roles.time)?;
     let (t0, t1) = (
         t.first().copied().unwrap_or(0.0),
@@ -240,14 +261,47 @@ fn splits(
             bin_s,
         });
     }
+    Ok(out)
+}
+
+/// The held-out splits of the verdict: the verification run, or the training run's blocks.
+fn splits(
+    roles: &Roles,
+    data: &Dataset,
+    verify: Option<&Dataset>,
+    opts: &ConfirmOptions,
+    blocks: &[Split],
+) -> Result<(Vec<Split>, String)> {
+    if let Some(v) = verify {
+        let bin_s =
+            tcomp_train::features::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
+        let split = Split {
+            train: data.clone(),
+            test: v.clone(),
+            bin_s,
+        };
+        return Ok((vec![split], format!("verification run {}", v.file())));
+    }
     Ok((
-        out,
-        format!("{k} contiguous blocks of the training run, each predicted by a fit on the rest"),
+        blocks
+            .iter()
+            .map(|b| Split {
+                train: b.train.clone(),
+                test: b.test.clone(),
+                bin_s: b.bin_s,
+            })
+            .collect(),
+        format!(
+            "{} contiguous blocks of the training run, each predicted by a fit on the rest",
+            blocks.len()
+        ),
     ))
 }
 
-/// Refits the leading candidates and replaces their held-out figures with the real ones; every
-/// other candidate is marked unconfirmed. Returns the refitted base's held-out residual.
+/// Refits the leading candidates (their parameters estimated first, on the binned training run of
+/// `prepared`) and replaces their held-out figures with the real ones; every other candidate is
+/// marked unconfirmed. The refits split the run at the gaps `prepared` does. Returns the refitted
+/// base's held-out residual.
 pub fn confirm(
     info: &ModelInfo,
     roles: &Roles,
@@ -255,8 +309,11 @@ pub fn confirm(
     verify: Option<&Dataset>,
     cands: &mut [Scored],
     opts: &ConfirmOptions,
+    prepared: &Prepared,
 ) -> Result<f64> {
-    let (splits, heldout) = splits(roles, data, verify, opts)?;
+    let refits = Refits::new(info, roles, data, prepared.gap_s);
+    let blocks = training_blocks(roles, data, opts)?;
+    let (splits, heldout) = splits(roles, data, verify, opts, &blocks)?;
     let mut order: Vec<usize> = (0..cands.len())
         .filter(|&i| cands[i].delta_log_evidence >= 0.0)
         .collect();
@@ -266,25 +323,31 @@ pub fn confirm(
             .total_cmp(&cands[a].delta_log_evidence)
     });
     order.truncate(opts.top);
-    for &i in &order {
-        if let Some(c) = cands.get_mut(i) {
-            rechoose_parameter(info, roles, data, c);
+    let mut leading: Vec<Scored> = order.iter().filter_map(|&i| cands.get(i).cloned()).collect();
+    leading
+        .par_iter_mut()
+        .for_each(|c| refits.estimate(c, prepared, &blocks));
+    for (&i, c) in order.iter().zip(leading) {
+        if let Some(slot) = cands.get_mut(i) {
+            *slot = c;
         }
     }
     let mut jobs: Vec<Option<usize>> = vec![None];
     jobs.extend(order.iter().map(|&i| Some(i)));
-    let results: Vec<Result<HeldOutFigures>> = jobs
+    let results: Vec<Result<Refitted>> = jobs
         .par_iter()
         .map(|job| {
-            let extra = job
-                .map(|i| cands[i].expressions.clone())
-                .unwrap_or_default();
-            heldout_std(info, roles, &splits, &extra)
+            let features = refits.features(job.and_then(|i| cands.get(i)));
+            let figures = heldout_std(&refits, &splits, &features)?;
+            Ok((figures, refits.log_evidence(&features)))
         })
         .collect();
     let mut results = results.into_iter();
-    let (before, before_each) = results.next().unwrap_or(Ok((f64::NAN, Vec::new())))?;
-    let mut outcome: Vec<(usize, std::result::Result<HeldOutFigures, String>)> = Vec::new();
+    let ((before, before_each), base_evidence) = results
+        .next()
+        .unwrap_or(Ok(((f64::NAN, Vec::new()), f64::NAN)))?;
+    let mut outcome: Vec<(usize, std::result::Result<Refitted, String>)> =
+        Vec::new();
     for (&i, r) in order.iter().zip(results) {
         outcome.push((i, r.map_err(|e| e.to_string())));
     }
@@ -298,7 +361,7 @@ pub fn confirm(
     for (i, r) in outcome {
         let Some(c) = cands.get_mut(i) else { continue };
         match r {
-            Ok((after, after_each)) => {
+            Ok(((after, after_each), evidence)) => {
                 let improvement_pct = 100.0 * (1.0 - after / before);
                 let splits_improved = after_each
                     .iter()
@@ -313,6 +376,7 @@ pub fn confirm(
                     heldout: heldout.clone(),
                     splits_improved,
                     splits: n,
+                    delta_log_evidence_refit: evidence - base_evidence,
                 });
                 c.residual_std_before = before;
                 c.residual_std_after = after;

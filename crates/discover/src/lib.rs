@@ -26,11 +26,17 @@ pub mod candidates;
 pub mod confirm;
 mod design;
 pub mod error;
+pub mod families;
+pub mod param;
+pub mod program;
+pub mod rounds;
 pub mod score;
 pub mod segments;
+mod surrogate;
 pub mod verdict;
 
 pub use error::{DiscoverError, Result};
+pub use rounds::{Rounds, diagnose_rounds};
 pub use verdict::{Criterion, Verdict};
 
 use serde::Serialize;
@@ -53,10 +59,11 @@ pub struct ModelInfo {
     pub unit: String,
 }
 
-/// The source of a model's program and its roles.
+/// The source of a model's program as the user wrote it (see [`program::user_spec`]) and its
+/// roles.
 pub fn model_info(model: &HostModel<'_>) -> ModelInfo {
     ModelInfo {
-        spec: FeatureSpec {
+        spec: program::user_spec(&FeatureSpec {
             signals: model
                 .program
                 .signals
@@ -69,7 +76,7 @@ pub fn model_info(model: &HostModel<'_>) -> ModelInfo {
                 .iter()
                 .map(|s| s.to_string())
                 .collect(),
-        },
+        }),
         roles: Roles::of_model(model),
         unit: model.meta.unit.to_string(),
     }
@@ -224,7 +231,15 @@ pub fn diagnose(
                 .into(),
         });
     }
-    let refit_before = confirm::confirm(&info, &roles, data, verify, &mut cands, &opts.confirm)?;
+    let refit_before = confirm::confirm(
+        &info,
+        &roles,
+        data,
+        verify,
+        &mut cands,
+        &opts.confirm,
+        &prepared,
+    )?;
     opts.criterion.apply(&prepared.figures, &mut cands);
     let (verdict, verdict_text) = verdict::decide(&cands);
     let diagnosis = Diagnosis {

@@ -20,13 +20,17 @@
 //!   on `folds` contiguous blocks of the training run, each predicted from the others with the
 //!   converged hyperparameters.
 //! * **Families** (a lag's τ, a threshold, a rate window) are marginalised over their grid:
-//!   `ln mean(exp Δ)`, so searching more values does not buy evidence; τ of the best member is
-//!   reported, and [`crate::confirm`] re-chooses it among that member and its grid neighbours by
-//!   the real refits' evidence (the fixed base Gaussians here absorb part of a slow effect and bias
-//!   τ short).
+//!   `ln mean(exp Δ)`, so searching more values does not buy evidence; the best member ranks the
+//!   family, and [`crate::param`] then estimates the parameter of the families that are confirmed
+//!   on a continuous scale by the real refits (the fixed base Gaussians here absorb part of a slow
+//!   effect and bias τ short).
+//! * **Replacements** (a lag of T put in place of T in every feature) are scored here as the
+//!   base design plus their new columns — an approximation that ranks them; whether the element
+//!   sees the lagged temperature *instead of* the thermometer's is decided by the real refits of
+//!   [`crate::confirm`], which fit the replaced feature set.
 
 pub use crate::base::{BaseFigures, Prepared, base_residual, binned_feature, prepare};
-use crate::candidates::{Candidate, EffectKind, Family};
+use crate::candidates::{Candidate, EffectKind, Family, Search};
 use crate::design::{hcat, mean_sd};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -133,16 +137,36 @@ pub struct Scored {
     pub train_residual_std_after: f64,
     /// Members scored.
     pub members: usize,
-    /// The family members next to the best one in its grid (a lag's τ/2 and 2τ, say), which the
-    /// confirmation refits to choose the parameter by the real fit's evidence.
+    /// The model's features the expressions replace (empty: they are added).
+    pub replaces: Vec<String>,
+    /// The model's feature this candidate only re-states with another parameter (a refinement,
+    /// not a missing effect).
+    pub refines: Option<String>,
+    /// How the family's parameter is searched ([`crate::param`]).
     #[serde(skip)]
-    pub neighbours: Vec<Candidate>,
-    /// Set when the confirmation's refits moved the parameter away from the scoring's choice.
+    pub search: Option<Search>,
+    /// The estimate of the parameter, when it was searched.
+    pub estimate: Option<crate::param::Estimate>,
+    /// The scoring grid's best parameter, when the estimate moved away from it.
     pub parameter_scored: Option<f64>,
     /// Whether it clears the criterion (set by the verdict).
     pub passes: bool,
     /// Why it does not (set by the verdict).
     pub fails: Vec<String>,
+}
+
+impl Scored {
+    /// The candidate as it stands (after any estimate of its parameter).
+    pub fn candidate(&self) -> Candidate {
+        Candidate {
+            kind: self.kind,
+            effect: self.effect.clone(),
+            expressions: self.expressions.clone(),
+            parameter: self.parameter,
+            replaces: self.replaces.clone(),
+            refines: self.refines.clone(),
+        }
+    }
 }
 
 /// A candidate that was not scored.
@@ -265,18 +289,10 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             unconfirmed: None,
             train_residual_std_after: best.train_std,
             members: mine.len(),
-            neighbours: {
-                let fam = families.get(f).map_or(&[][..], |x| x.members.as_slice());
-                let at = fam.iter().position(|m| std::ptr::eq(m, best_c));
-                at.map(|i| {
-                    [i.checked_sub(1), Some(i + 1)]
-                        .into_iter()
-                        .flatten()
-                        .filter_map(|j| fam.get(j).cloned())
-                        .collect()
-                })
-                .unwrap_or_default()
-            },
+            replaces: best_c.replaces.clone(),
+            refines: best_c.refines.clone(),
+            search: families.get(f).and_then(|x| x.search.clone()),
+            estimate: None,
             parameter_scored: None,
             passes: false,
             fails: Vec::new(),

@@ -19,6 +19,11 @@
 //! The held-out figures of legs 1 (its held-out path), 2 and 3 are those of a real refit by the
 //! trainer ([`crate::confirm`]): only the few candidates so refitted can be named, so a verdict never
 //! rests on the scoring's fixed-center estimate alone.
+//!
+//! Among the candidates that pass, the one named is the one whose real refit has the most log
+//! evidence on the training run (a lag of T in place of T against the same lag beside T: the data
+//! say which). A candidate that only re-states a feature the model has (its rate with a longer
+//! window) is a refinement, named as such and never as a missing effect.
 
 use crate::score::{BaseFigures, Scored};
 use serde::Serialize;
@@ -126,10 +131,17 @@ impl Criterion {
             c.passes = fails.is_empty();
             c.fails = fails;
         }
+        // Passing first; among them missing effects before refinements, then by the real refits'
+        // evidence; the rest by the scoring's evidence.
+        let rank = |c: &Scored| match (&c.confirmation, c.passes) {
+            (Some(k), true) => k.delta_log_evidence_refit,
+            _ => c.delta_log_evidence,
+        };
         cands.sort_by(|a, b| {
             b.passes
                 .cmp(&a.passes)
-                .then(b.delta_log_evidence.total_cmp(&a.delta_log_evidence))
+                .then((a.passes && a.refines.is_some()).cmp(&(b.passes && b.refines.is_some())))
+                .then(rank(b).total_cmp(&rank(a)))
         });
     }
 }
@@ -144,23 +156,72 @@ pub enum Verdict {
     None,
 }
 
+/// `--feature 'e'` for each expression.
+fn flags(exprs: &[String]) -> String {
+    exprs
+        .iter()
+        .map(|e| format!("--feature '{e}'"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// What to do with a candidate: add its features, or put them in place of the model's.
+pub fn instruction(c: &Scored) -> String {
+    if c.replaces.is_empty() {
+        format!("add {}", flags(&c.expressions))
+    } else {
+        format!(
+            "replace {} by {}",
+            flags(&c.replaces),
+            flags(&c.expressions)
+        )
+    }
+}
+
+/// The parameter's estimate in a few words, when it was estimated.
+fn estimate_text(c: &Scored) -> String {
+    c.estimate.as_ref().map_or_else(String::new, |e| {
+        let n = |v: f64| crate::candidates::num(crate::param::two_significant(v));
+        format!(
+            "; parameter {} ({} … {} cannot be told apart{})",
+            n(e.value),
+            n(e.interval[0]),
+            n(e.interval[1]),
+            if e.chosen_by == crate::param::ChosenBy::CrossValidation {
+                ", chosen by cross-validation on the training run"
+            } else {
+                ""
+            }
+        )
+    })
+}
+
 /// The verdict for sorted candidates, with a sentence.
 pub fn decide(cands: &[Scored]) -> (Verdict, String) {
     match cands.first() {
-        Some(c) if c.passes => (
+        Some(c) if c.passes && c.refines.is_none() => (
             Verdict::MissingEffect,
             format!(
-                "missing effect: {} — add {} (Δ log evidence {:+.1}; held-out residual {:.3e} → {:.3e}, {:.1} % lower)",
+                "missing effect: {} — {} (Δ log evidence {:+.1}; held-out residual {:.3e} → {:.3e}, {:.1} % lower{})",
                 c.effect,
-                c.expressions
-                    .iter()
-                    .map(|e| format!("--feature '{e}'"))
-                    .collect::<Vec<_>>()
-                    .join(" "),
+                instruction(c),
                 c.delta_log_evidence,
                 c.residual_std_before,
                 c.residual_std_after,
-                c.improvement_pct
+                c.improvement_pct,
+                estimate_text(c)
+            ),
+        ),
+        Some(c) if c.passes => (
+            Verdict::None,
+            format!(
+                "no significant missing effect; a refinement passes the criterion: {} — {}                  (held-out residual {:.3e} → {:.3e}, {:.1} % lower{})",
+                c.effect,
+                instruction(c),
+                c.residual_std_before,
+                c.residual_std_after,
+                c.improvement_pct,
+                estimate_text(c)
             ),
         ),
         Some(c) => (
