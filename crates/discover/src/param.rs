@@ -11,7 +11,10 @@
 //! 2. **Golden section.** Around the best grid value, between its neighbours, [`GOLDEN_STEPS`]
 //!    steps of golden-section search on log p (the bracket shrinks to 0.618^steps of its width).
 //! 3. **Interval.** The values whose evidence is within [`FLAT_NATS`] of the best (odds of about
-//!    7 : 1 or less against the best), read from the profile with linear interpolation in log p;
+//!    7 : 1 or less against the best) — nats of real information: the evidence treats every bin as
+//!    independent, so with the surrogate's residual correlated from bin to bin (lag-1
+//!    autocorrelation ρ) the threshold is divided by the fraction (1 − ρ)/(1 + ρ) of independent
+//!    bins — read from the profile with linear interpolation in log p;
 //!    an end of the range when the profile never falls that far (the data do not bound it).
 //! 4. **Flat evidence.** When that interval spans more than a factor of [`FLAT_RATIO`] — adding
 //!    `lag(T, τ)` beside `T` lets many τ fit the training run, as the issue's QMA showed (flat
@@ -34,6 +37,9 @@ pub const GRID: usize = 25;
 pub const GOLDEN_STEPS: usize = 12;
 /// Nats below the best log evidence that bound the interval of unresolved values.
 pub const FLAT_NATS: f64 = 2.0;
+/// Smallest fraction of the bins counted as independent observations (a residual correlated
+/// from bin to bin with ρ = 0.96).
+pub const MIN_INFORMATION: f64 = 0.02;
 /// Interval ratio above which the evidence is called flat and cross-validation chooses.
 pub const FLAT_RATIO: f64 = 2.0;
 /// Values of the interval compared by cross-validation when the evidence is flat.
@@ -134,6 +140,7 @@ fn crossing(profile: &[(f64, f64)], i: usize, thr: f64, left: bool) -> Option<f6
 pub fn estimate(
     search: &Search,
     evidence: &(dyn Fn(f64) -> f64 + Sync),
+    information: &(dyn Fn(f64) -> f64 + Sync),
     heldout: &(dyn Fn(f64) -> Option<f64> + Sync),
 ) -> Option<Estimate> {
     let (ulo, uhi) = (search.lo.ln(), search.hi.ln());
@@ -142,7 +149,10 @@ pub fn estimate(
         let v = evidence(u.exp());
         if v.is_finite() { v } else { f64::NEG_INFINITY }
     };
-    let mut seen: Vec<(f64, f64)> = (0..GRID).into_par_iter().map(|k| (at(k), f(at(k)))).collect();
+    let mut seen: Vec<(f64, f64)> = (0..GRID)
+        .into_par_iter()
+        .map(|k| (at(k), f(at(k))))
+        .collect();
     let value = |k: usize| seen.get(k).map_or(f64::NEG_INFINITY, |s| s.1);
     let best_grid = (0..GRID).max_by(|&a, &b| value(a).total_cmp(&value(b)))?;
     if !value(best_grid).is_finite() {
@@ -159,7 +169,11 @@ pub fn estimate(
         .iter()
         .enumerate()
         .max_by(|a, b| a.1.1.total_cmp(&b.1.1))?;
-    let thr = fb - FLAT_NATS;
+    // The evidence counts every bin as an independent observation; a correlated residual (bias
+    // instability, a random walk) carries fewer: FLAT_NATS of real information is
+    // FLAT_NATS / fraction of the computed evidence.
+    let fraction = information(ub.exp()).clamp(MIN_INFORMATION, 1.0);
+    let thr = fb - FLAT_NATS / fraction;
     let lo = crossing(&seen, ib, thr, true);
     let hi = crossing(&seen, ib, thr, false);
     let interval = [lo.unwrap_or(ulo).exp(), hi.unwrap_or(uhi).exp()];
@@ -193,7 +207,8 @@ pub fn estimate(
         chosen_by = ChosenBy::Default;
         optimum = d;
         note = format!(
-            "the training run's evidence is flat in {what} (within {FLAT_NATS} nats from {} to {}):              the language's default, which it does not reject; {} would resolve it",
+            "the training run's evidence is flat in {what} (within {FLAT_NATS} nats from {} to {}): \
+             the language's default, which it does not reject; {} would resolve it",
             crate::candidates::num(two_significant(interval[0])),
             crate::candidates::num(two_significant(interval[1])),
             search.template.resolving_profile()
@@ -251,23 +266,35 @@ mod tests {
     fn a_peaked_profile_is_found_on_a_continuous_scale() {
         // A log evidence peaked at τ = 1834 s, 40 nats per unit of ln τ squared.
         let ev = |p: f64| -40.0 * (p / 1834.0).ln().powi(2);
-        let e = estimate(&lag_search(), &ev, &|_| None).unwrap_or_else(|| unreachable!());
+        let e = estimate(&lag_search(), &ev, &|_| 1.0, &|_| None).unwrap_or_else(|| unreachable!());
         assert!((e.optimum / 1834.0 - 1.0).abs() < 0.02, "{e:?}");
         assert_eq!(e.value, 1800.0);
         assert_eq!(e.chosen_by, ChosenBy::Evidence);
         assert!(e.bounded);
         // ±√(2/40) in ln τ.
         let w = (2.0f64 / 40.0).sqrt();
-        assert!((e.interval[0] / (1834.0 * (-w).exp()) - 1.0).abs() < 0.05, "{e:?}");
-        assert!((e.interval[1] / (1834.0 * w.exp()) - 1.0).abs() < 0.05, "{e:?}");
+        assert!(
+            (e.interval[0] / (1834.0 * (-w).exp()) - 1.0).abs() < 0.05,
+            "{e:?}"
+        );
+        assert!(
+            (e.interval[1] / (1834.0 * w.exp()) - 1.0).abs() < 0.05,
+            "{e:?}"
+        );
     }
 
     #[test]
     fn a_flat_profile_is_decided_by_cross_validation_and_says_so() {
         // Flat within a nat from 500 to 5000 s; the held-out residual is lowest at 2000 s.
-        let ev = |p: f64| if (500.0..5000.0).contains(&p) { 0.0 } else { -10.0 };
+        let ev = |p: f64| {
+            if (500.0..5000.0).contains(&p) {
+                0.0
+            } else {
+                -10.0
+            }
+        };
         let cv = |p: f64| Some((p / 2000.0).ln().abs() + 1.0);
-        let e = estimate(&lag_search(), &ev, &cv).unwrap_or_else(|| unreachable!());
+        let e = estimate(&lag_search(), &ev, &|_| 1.0, &cv).unwrap_or_else(|| unreachable!());
         assert_eq!(e.chosen_by, ChosenBy::CrossValidation);
         assert!(e.interval[0] < 700.0 && e.interval[1] > 3500.0, "{e:?}");
         assert!((e.optimum / 2000.0).ln().abs() < 0.4, "{e:?}");

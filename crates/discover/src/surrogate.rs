@@ -22,23 +22,56 @@ const POWERS: [i32; 3] = [1, 2, 3];
 /// Log evidence of the surrogate of `features` on the binned training run of `p` (normalised
 /// units, comparable between feature sets on the same run); −∞ when a feature cannot be computed,
 /// is constant, or the evidence iteration fails.
-pub(crate) fn log_evidence(p: &Prepared, features: &[String]) -> f64 {
-    let Ok((cols, _)) = p.standardised(features) else {
-        return f64::NEG_INFINITY;
+pub(crate) fn log_evidence(p: &Prepared, features: &[String], cubic: usize) -> f64 {
+    fitted(p, features, cubic).map_or(f64::NEG_INFINITY, |f| f.0.log_evidence)
+}
+
+/// The fraction (1 − ρ)/(1 + ρ) of the binned training run's bins that count as independent
+/// observations, ρ the lag-1 autocorrelation of the surrogate's residual (1 when ρ ≤ 0 or the fit
+/// fails).
+pub(crate) fn information(p: &Prepared, features: &[String], cubic: usize) -> f64 {
+    let Some((fit, phi)) = fitted(p, features, cubic) else {
+        return 1.0;
     };
+    let r = &p.y - phi * &fit.w;
+    let ss: f64 = r.iter().map(|v| v * v).sum();
+    let lag1: f64 = r.iter().zip(r.iter().skip(1)).map(|(a, b)| a * b).sum();
+    let rho = if ss > 0.0 { (lag1 / ss).max(0.0) } else { 0.0 };
+    (1.0 - rho) / (1.0 + rho)
+}
+
+/// The surrogate's evidence fit and its design matrix.
+fn fitted(
+    p: &Prepared,
+    features: &[String],
+    cubic: usize,
+) -> Option<(evidence::GroupFit, DMatrix<f64>)> {
+    let Ok((cols, _)) = p.standardised(features) else {
+        return None;
+    };
+    // (feature, power) of each column after the constant.
+    let terms: Vec<(usize, i32)> = (0..cols.len())
+        .flat_map(|k| {
+            let powers: &[i32] = if k < cubic { &POWERS } else { &POWERS[..1] };
+            powers.iter().map(move |&q| (k, q))
+        })
+        .collect();
     let n = p.y.len();
-    let m = 1 + cols.len() * POWERS.len();
-    let mut groups = vec![0usize; m];
+    let m = 1 + terms.len();
     let phi = DMatrix::from_fn(n, m, |i, j| {
-        if j == 0 {
-            return 1.0;
+        match j.checked_sub(1).and_then(|t| terms.get(t)) {
+            None => 1.0,
+            Some(&(k, q)) => cols
+                .get(k)
+                .and_then(|c| c.get(i))
+                .copied()
+                .unwrap_or(0.0)
+                .powi(q),
         }
-        let (k, q) = ((j - 1) / POWERS.len(), (j - 1) % POWERS.len());
-        let z = cols.get(k).and_then(|c| c.get(i)).copied().unwrap_or(0.0);
-        z.powi(POWERS.get(q).copied().unwrap_or(1))
     });
-    for (j, g) in groups.iter_mut().enumerate().skip(1) {
-        *g = 1 + (j - 1) % POWERS.len();
+    let mut groups = vec![0usize; m];
+    for (g, &(_, q)) in groups.iter_mut().skip(1).zip(&terms) {
+        *g = usize::try_from(q).unwrap_or(1);
     }
-    evidence::fit(&phi, &p.y, &groups, None).map_or(f64::NEG_INFINITY, |f| f.log_evidence)
+    evidence::fit(&phi, &p.y, &groups, None).map(|f| (f, phi))
 }

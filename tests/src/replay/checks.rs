@@ -100,8 +100,10 @@ pub struct Summary {
     pub flagged: u64,
     /// Instructions per sample, mean and worst.
     pub mean: u64,
-    /// Worst instructions per sample.
+    /// Worst instructions per ordinary sample (not after missed periods).
     pub max: u64,
+    /// The worst over the samples after missed timer periods (the gap step).
+    pub max_after_gap: u64,
     /// Samples taken late.
     pub late: u64,
     /// Timer periods missed.
@@ -138,6 +140,7 @@ pub fn check(text: &str, host_hash: u32, samples: usize) -> Result<Summary> {
         flagged,
         mean: get("instructions_mean=")?,
         max: get("instructions_max=")?,
+        max_after_gap: get("instructions_max_after_gap=")?,
         late: get("late=")?,
         missed: get("missed=")?,
         resets: get("watchdog_resets=")?,

@@ -117,7 +117,9 @@ struct Run {
     hash: u32,
     /// Sum of per-sample counts: at most 10⁴ samples of ~10⁴ instructions, far below 2³².
     instr_sum: u32,
+    /// Worst count over the ordinary samples, and over the samples after missed periods.
     instr_max: u32,
+    instr_max_gap: u32,
     /// Samples taken late (after a period overran) and timer periods missed entirely.
     late: u32,
     missed: u32,
@@ -142,6 +144,7 @@ impl Run {
         hash: HASH_START,
         instr_sum: 0,
         instr_max: 0,
+        instr_max_gap: 0,
         late: 0,
         missed: 0,
         watchdog_resets: 0,
@@ -423,7 +426,7 @@ fn finish(paint_bottom: usize, paint_top: usize, committed: Option<(SlotId, u32)
     r.stack_peak = r.stack_peak.max(stack_top.saturating_sub(peak) as u32);
     let timed = r.samples.max(1);
     defmt::println!(
-        "REPLAY-SUMMARY config={=u16} samples={=u32} mismatches={=u32} flagged={=u32} hash={=u32} instructions_mean={=u32} instructions_max={=u32} instructions_max_at={=u32} period_ticks={=u32} late={=u32} missed={=u32} watchdog_resets={=u32} stack_bytes={=u32}",
+        "REPLAY-SUMMARY config={=u16} samples={=u32} mismatches={=u32} flagged={=u32} hash={=u32} instructions_mean={=u32} instructions_max={=u32} instructions_max_at={=u32} instructions_max_after_gap={=u32} period_ticks={=u32} late={=u32} missed={=u32} watchdog_resets={=u32} stack_bytes={=u32}",
         config,
         r.samples,
         r.mismatches,
@@ -432,6 +435,7 @@ fn finish(paint_bottom: usize, paint_top: usize, committed: Option<(SlotId, u32)
         r.instr_sum / timed,
         r.instr_max,
         r.instr_max_at,
+        r.instr_max_gap,
         r.period_ticks,
         r.late,
         r.missed,

@@ -77,7 +77,11 @@ impl Loop {
         let instr = self.counter.ticks_between(i0, i1) * INSTRUCTIONS_PER_TICK;
         let r = &mut *self.run;
         r.instr_sum = r.instr_sum.saturating_add(instr);
-        if instr > r.instr_max {
+        // The sample after missed periods carries every filter across the gap (more work, once,
+        // after an overrun): counted apart, with its own budget.
+        if missed > 0 {
+            r.instr_max_gap = r.instr_max_gap.max(instr);
+        } else if instr > r.instr_max {
             r.instr_max = instr;
             r.instr_max_at = n as u32;
         }
