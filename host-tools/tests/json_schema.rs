@@ -102,6 +102,8 @@ fn every_command_speaks_the_schema() {
                 p("train.csv"),
                 "--verify".into(),
                 p("verify.csv"),
+                "--rounds".into(),
+                "2".into(),
                 "--quiet".into(),
                 "--json".into(),
             ],

@@ -41,7 +41,7 @@ pub struct ConfirmOptions {
 impl Default for ConfirmOptions {
     fn default() -> Self {
         Self {
-            top: 3,
+            top: 5,
             heldout_bin_s: 100.0,
             folds: 5,
         }

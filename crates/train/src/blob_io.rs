@@ -18,6 +18,59 @@ pub use tcomp_core::HostModel;
 /// Largest blob the host writes.
 pub const MAX_BLOB: usize = 64 * 1024;
 
+/// What a model was trained on, as its blob's `trained_on` says it:
+/// `"FILE [FROM s, UNTIL s) t=T0..T1 s"` — the file, the `--from/--until` window when one was
+/// given, and the times of the first and last rows used. Written by the trainer and read by
+/// `tcomp image` (provenance) and `tcomp diagnose` (the model's training window) from this one
+/// definition.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrainedOn {
+    /// The data file as the trainer was given it.
+    pub file: String,
+    /// The `--from/--until` window (s), when one was given.
+    pub window: Option<[f64; 2]>,
+    /// Time of the first and last row used (s).
+    pub span: Option<[f64; 2]>,
+}
+
+impl TrainedOn {
+    /// The text for a run named `data_file` (a [`crate::Dataset::file`], which carries the
+    /// window) whose rows span `t0..t1` seconds.
+    pub fn text(data_file: &str, t0: f64, t1: f64) -> String {
+        format!("{data_file} t={t0}..{t1} s")
+    }
+
+    /// Reads `trained_on`; parts it does not recognise are left in the file name.
+    pub fn parse(trained_on: &str) -> Self {
+        let (rest, span) = match trained_on.rsplit_once(" t=") {
+            Some((f, w)) => (f, pair(w.trim_end_matches(" s"), "..")),
+            None => (trained_on, None),
+        };
+        let (file, window) = match rest.rsplit_once(" [") {
+            Some((f, w)) if w.ends_with(" s)") => match pair(w.trim_end_matches(" s)"), " s, ") {
+                Some(p) => (f, Some(p)),
+                None => (rest, None),
+            },
+            _ => (rest, None),
+        };
+        TrainedOn {
+            file: file.to_string(),
+            window,
+            span: if file == rest || window.is_some() {
+                span
+            } else {
+                None
+            },
+        }
+    }
+}
+
+/// `"A<sep>B"` as two numbers.
+fn pair(text: &str, sep: &str) -> Option<[f64; 2]> {
+    let (a, b) = text.split_once(sep)?;
+    Some([a.trim().parse().ok()?, b.trim().parse().ok()?])
+}
+
 /// Everything a model blob holds, owned.
 #[derive(Clone, Debug)]
 pub struct OwnedModel {
@@ -183,4 +236,29 @@ pub fn check_flight(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
             ),
             source: crate::error::Core(e),
         })
+}
+
+#[cfg(test)]
+mod trained_on_tests {
+    use super::TrainedOn;
+
+    #[test]
+    fn the_trainer_s_text_reads_back() {
+        let t = TrainedOn::parse(&TrainedOn::text("data/a b.csv [0 s, 3130 s)", 0.5, 3129.5));
+        assert_eq!(t.file, "data/a b.csv");
+        assert_eq!(t.window, Some([0.0, 3130.0]));
+        assert_eq!(t.span, Some([0.5, 3129.5]));
+        let t = TrainedOn::parse(&TrainedOn::text("x.csv [-inf s, 100 s)", 1.0, 99.0));
+        assert_eq!(t.window, Some([f64::NEG_INFINITY, 100.0]));
+        let t = TrainedOn::parse(&TrainedOn::text("x.csv", 1.0, 2.0));
+        assert_eq!(
+            (t.file.as_str(), t.window, t.span),
+            ("x.csv", None, Some([1.0, 2.0]))
+        );
+        let t = TrainedOn::parse("tests/mutants.rs");
+        assert_eq!(
+            (t.file.as_str(), t.window, t.span),
+            ("tests/mutants.rs", None, None)
+        );
+    }
 }

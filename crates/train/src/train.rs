@@ -140,7 +140,7 @@ fn finish(
         target: opts.target.clone(),
         reference: opts.reference.clone().unwrap_or_default(),
         reference_value: prepared.reference_value.map(|v| v as f32),
-        trained_on: format!("{} t={t0}..{t1} s", data.file()),
+        trained_on: crate::blob_io::TrainedOn::text(data.file(), t0, t1),
         train_samples: y.len() as u32,
         spec,
         ranges,

@@ -34,6 +34,10 @@ pub struct Args {
     /// Candidates printed.
     #[arg(long, default_value_t = 10, allow_negative_numbers = true, value_parser = super::check::top)]
     pub top: usize,
+    /// Rounds: after an effect is confirmed, refit the model with it (as `tcomp fit --feature`
+    /// would, on the same rows) and diagnose again, until nothing passes or N rounds ran.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=8))]
+    pub rounds: u16,
     /// Print JSON.
     #[arg(long)]
     pub json: bool,
@@ -44,12 +48,58 @@ pub struct Args {
 
 /// Runs the diagnosis (shared with `report`) on the rows of `--from/--until`.
 pub fn analyse(args: &Args) -> anyhow::Result<(Analysis, Dataset)> {
+    let p = prepare(args)?;
+    let progress = super::progress::spinner(args.quiet, "diagnosing");
+    let a = tcomp_discover::diagnose(&p.model()?, &p.data, p.verify.as_ref(), &p.opts)?;
+    progress.finish_and_clear();
+    Ok((a, p.data))
+}
+
+/// What a diagnosis reads: the model's bytes, the rows, the held-out run and the options.
+struct Prepared {
+    model_path: PathBuf,
+    bytes: Vec<u8>,
+    data: Dataset,
+    verify: Option<Dataset>,
+    opts: DiagnoseOptions,
+}
+
+impl Prepared {
+    fn model(&self) -> anyhow::Result<tcomp_train::blob_io::HostModel<'_>> {
+        Ok(tcomp_train::blob_io::decode(&self.model_path, &self.bytes)?)
+    }
+}
+
+fn prepare(args: &Args) -> anyhow::Result<Prepared> {
     args.run.check_window()?;
     let bytes = tcomp_train::blob_io::read(&args.model)?;
     let model = tcomp_train::blob_io::decode(&args.model, &bytes)?;
     let roles = args.run.roles(&model);
-    let data = args.run.load(&roles.time)?;
-    let verify = args.verify.as_deref().map(Dataset::load).transpose()?;
+    let window = args.run.model_window(&model);
+    drop(model);
+    let mut data = args.run.load(&roles.time)?;
+    let mut verify = args.verify.as_deref().map(Dataset::load).transpose()?;
+    // The model's own training window (from its blob) when --data is its training file and no
+    // --from/--until says otherwise: diagnosing held-out rows as training data finds nothing.
+    if let Some([lo, hi]) = window {
+        let rest = rest_of(&data, &roles.time, lo, hi)?;
+        data = data.select_time(&roles.time, lo, hi)?;
+        if verify.is_none() {
+            verify = rest;
+        }
+        if !args.json && !args.quiet {
+            outln!(
+                "diagnosing the model's training window {} (from its blob; --from/--until choose \
+                 another){}",
+                data.file(),
+                if args.verify.is_none() && verify.is_some() {
+                    "; the rest of the file is the held-out run"
+                } else {
+                    ""
+                }
+            );
+        }
+    }
     let mut opts = DiagnoseOptions::default();
     opts.score.bin_s = args.bin;
     opts.score.gap_s = args.run.run.gap;
@@ -59,14 +109,34 @@ pub fn analyse(args: &Args) -> anyhow::Result<(Analysis, Dataset)> {
     if args.run.overrides_reference() {
         opts.roles = Some(roles);
     }
-    let progress = super::progress::spinner(args.quiet, "diagnosing");
-    let a = tcomp_discover::diagnose(&model, &data, verify.as_ref(), &opts)?;
-    progress.finish_and_clear();
-    Ok((a, data))
+    Ok(Prepared {
+        model_path: args.model.clone(),
+        bytes,
+        data,
+        verify,
+        opts,
+    })
+}
+
+/// The rows of `data` outside `[lo, hi)` as one run, when at least two are on one side (the side
+/// with more rows: a training window in the middle leaves two runs, and one is enough to report).
+fn rest_of(data: &Dataset, time: &str, lo: f64, hi: f64) -> anyhow::Result<Option<Dataset>> {
+    let t = data.time(time)?;
+    let before = t.iter().filter(|&&v| v < lo).count();
+    let after = t.iter().filter(|&&v| v >= hi).count();
+    let pick = if after >= before {
+        (after >= 2).then(|| data.select_time(time, hi, f64::INFINITY))
+    } else {
+        (before >= 2).then(|| data.select_time(time, f64::NEG_INFINITY, lo))
+    };
+    Ok(pick.transpose()?)
 }
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    if args.rounds > 1 {
+        return run_rounds(args);
+    }
     let (a, _) = analyse(args)?;
     if args.json {
         let d = &a.diagnosis;
@@ -85,6 +155,72 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             super::printable::lines(&crate::render::diagnosis::text(&a, args.top))
         );
     }
+    Ok(())
+}
+
+/// `--rounds N`: each round's diagnosis, what it added, the features after the last.
+fn run_rounds(args: &Args) -> anyhow::Result<()> {
+    let p = prepare(args)?;
+    let progress = super::progress::spinner(args.quiet, "diagnosing, round by round");
+    let r = tcomp_discover::diagnose_rounds(
+        &p.model()?,
+        &p.data,
+        p.verify.as_ref(),
+        &p.opts,
+        usize::from(args.rounds),
+    )?;
+    progress.finish_and_clear();
+    let first = r.analyses.first().map(|a| &a.diagnosis);
+    let Some(first) = first else {
+        anyhow::bail!("no round ran");
+    };
+    if args.json {
+        let mut subject = Subject::new(
+            vec![args.model.display().to_string()],
+            &first.model.target,
+            &first.model.unit,
+            &args.run.data,
+        );
+        subject.verify = args.verify.as_ref().map(|v| v.display().to_string());
+        let mut v = body(first)?;
+        if let Some(obj) = v.as_object_mut() {
+            let rounds = r
+                .analyses
+                .iter()
+                .map(|a| body(&a.diagnosis))
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            obj.insert("rounds".into(), serde_json::Value::Array(rounds));
+            obj.insert("applied".into(), serde_json::to_value(&r.applied)?);
+            obj.insert(
+                "final_features".into(),
+                serde_json::to_value(&r.final_features)?,
+            );
+            obj.insert("stopped".into(), serde_json::to_value(&r.stopped)?);
+        }
+        json::print("diagnose", &subject, &v)?;
+        return Ok(());
+    }
+    for (k, a) in r.analyses.iter().enumerate() {
+        outln!("══ round {} ══", k + 1);
+        out!(
+            "{}",
+            super::printable::lines(&crate::render::diagnosis::text(a, args.top))
+        );
+        if let Some(x) = r.applied.iter().find(|x| x.round == k + 1) {
+            outln!(
+                "round {} adds {}: the next round starts from a refit with --feature {}",
+                x.round,
+                super::printable::lines(&x.effect),
+                super::printable::lines(&x.features.join(" --feature "))
+            );
+        }
+        outln!();
+    }
+    outln!("stopped: {}", r.stopped);
+    outln!(
+        "features after the rounds: {}",
+        super::printable::lines(&r.final_features.join(", "))
+    );
     Ok(())
 }
 

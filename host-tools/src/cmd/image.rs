@@ -89,23 +89,14 @@ struct Loaded {
 /// `"FILE [FROM s, UNTIL s) t=T0..T1 s"` (the trainer's `trained_on`) as the file, its hash when
 /// it is there to read, and the window of the rows it trained on.
 fn provenance_of(trained_on: &str) -> (String, u64, [f32; 2]) {
-    let (file, window) = trained_on
-        .rsplit_once(" t=")
-        .map_or((trained_on, None), |(f, w)| (f, Some(w)));
-    let file = match file.rsplit_once(" [") {
-        Some((f, range)) if range.ends_with(')') => f,
-        _ => file,
-    };
-    let window = window
-        .and_then(|w| w.trim_end_matches(" s").split_once(".."))
-        .and_then(|(a, b)| Some([a.parse().ok()?, b.parse().ok()?]))
-        .unwrap_or([f32::NAN; 2]);
-    let hash = std::fs::read(file).map_or(0, |bytes| {
+    let t = tcomp_train::blob_io::TrainedOn::parse(trained_on);
+    let window = t.span.map_or([f32::NAN; 2], |[a, b]| [a as f32, b as f32]);
+    let hash = std::fs::read(&t.file).map_or(0, |bytes| {
         let mut h = Fnv64::new();
         h.write(&bytes);
         h.finish()
     });
-    (file.to_string(), hash, window)
+    (t.file, hash, window)
 }
 
 fn load_model(spec: &str, board: &Board, done: &[Loaded]) -> anyhow::Result<Loaded> {

@@ -87,6 +87,7 @@ fn diagnose(
         min_evidence: 5.0,
         min_improvement: 5.0,
         top: 10,
+        rounds: 1,
         json: false,
         quiet: args.quiet,
     };

@@ -64,6 +64,23 @@ impl RunArgs {
         roles
     }
 
+    /// The window `model` was trained on, when `--data` is its training file and no
+    /// `--from/--until` was given: the rows to diagnose, and the rest of the file as the run held
+    /// out (what `tcomp fit --from/--until` left out of training).
+    pub fn model_window(&self, model: &HostModel<'_>) -> Option<[f64; 2]> {
+        if self.run.from.is_some() || self.run.until.is_some() {
+            return None;
+        }
+        let t = tcomp_train::blob_io::TrainedOn::parse(model.meta.trained_on);
+        let same =
+            |a: &std::path::Path, b: &std::path::Path| match (a.canonicalize(), b.canonicalize()) {
+                (Ok(a), Ok(b)) => a == b,
+                _ => a == b,
+            };
+        t.window
+            .filter(|_| same(std::path::Path::new(&t.file), &self.data))
+    }
+
     /// Loads `--data` and keeps the rows of the window (time column `time`); at least two rows
     /// must remain, since one row has no spread and every figure would be a meaningless zero.
     pub fn load(&self, time: &str) -> anyhow::Result<Dataset> {
