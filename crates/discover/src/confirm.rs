@@ -84,19 +84,57 @@ pub struct Confirmation {
     /// Δ log evidence of the trainer's refits on the whole training run: with the candidate
     /// minus without.
     pub delta_log_evidence_refit: f64,
+    /// The same refits on the verification run, when there is one: reported, never used to
+    /// choose (the figures above, on blocks of the training run, are what the criterion reads).
+    pub verification: Option<Verification>,
 }
 
-/// Pooled held-out residual std and the one of each split.
-type HeldOutFigures = (f64, Vec<f64>);
+/// A confirmed candidate's figures on the verification run.
+#[derive(Clone, Debug, Serialize)]
+pub struct Verification {
+    /// What the run was.
+    pub run: String,
+    /// Binned residual std of the refitted base feature set on it.
+    pub residual_std_before: f64,
+    /// The same with the candidate added.
+    pub residual_std_after: f64,
+    /// 100·(after/before − 1): negative when the residual fell.
+    pub change_pct: f64,
+}
 
-/// A refit's held-out figures and its log evidence on the whole training run.
-type Refitted = (HeldOutFigures, f64);
+/// What the confirmation measured of the base feature set, for the criterion and the report.
+#[derive(Clone, Copy, Debug)]
+pub struct BaseRefit {
+    /// Held-out residual std over the training run's blocks.
+    pub residual_std: f64,
+    /// Noise floor estimated from those blocks' binned residuals (robust, successive
+    /// differences): the criterion's yardstick, from the training run only.
+    pub noise_floor: f64,
+    /// Residual std on the verification run, when there is one.
+    pub verification_std: Option<f64>,
+}
+
+/// Pooled held-out residual std, the one of each split, and each split's binned residual.
+struct HeldOutFigures {
+    pooled: f64,
+    each: Vec<f64>,
+    binned: Vec<Vec<f64>>,
+}
+
+/// A refit's figures on the training blocks and on the verification run, and its log evidence
+/// on the whole training run.
+type Refitted = (HeldOutFigures, Option<HeldOutFigures>, f64);
 
 /// One train/test split.
 struct Split {
     train: Dataset,
     test: Dataset,
     bin_s: f64,
+    /// The rows of `test` scored, `[lo, hi)` s: a block of the training run is predicted by
+    /// running the refit over the whole run (the filters' state and warm-up's clock continuous, as
+    /// on the board) and scoring the block's rows only; a block run on its own would start its
+    /// lags cold and warm-up's clock at the block's first row.
+    score: Option<(f64, f64)>,
 }
 
 /// What every refit shares: the model, its roles, the training run and the gap threshold.
@@ -180,7 +218,7 @@ impl<'a> Refits<'a> {
                 &search.template.member(p).applied_to(features),
             )
             .ok()
-            .map(|r| r.0)
+            .map(|r| r.pooled)
         };
         let Some(est) = crate::param::estimate(&search, &evidence, &information, &heldout) else {
             return;
@@ -205,22 +243,33 @@ fn heldout_std(r: &Refits<'_>, splits: &[Split], features: &[String]) -> Result<
     let o = r.options(features);
     let (mut sum, mut count) = (0.0f64, 0usize);
     let mut each = Vec::with_capacity(splits.len());
+    let mut binned = Vec::with_capacity(splits.len());
     for sp in splits {
         let fitted = tcomp_train::fit(&sp.train, &o)?;
         let bytes = fitted.model.to_bytes()?;
         let model = tcomp_train::blob_io::decode(Path::new("<refit>"), &bytes)?;
-        let run = metrics::run_model(&model, &sp.test, &Roles::of_model(&model), None, r.gap_s)?;
+        let mut run =
+            metrics::run_model(&model, &sp.test, &Roles::of_model(&model), None, r.gap_s)?;
+        if let Some((lo, hi)) = sp.score {
+            run = run.window(lo, hi);
+        }
         let b = metrics::report(&run, sp.bin_s).binned;
         sum += b.residual_std.powi(2) * b.bins as f64;
         count += b.bins;
         each.push(b.residual_std);
+        let bins = tcomp_train::features::bins(&run.time, sp.bin_s);
+        binned.push(tcomp_train::features::bin_mean(&run.residual, &bins));
     }
     let pooled = if count > 0 {
         (sum / count as f64).sqrt()
     } else {
         f64::NAN
     };
-    Ok((pooled, each))
+    Ok(HeldOutFigures {
+        pooled,
+        each,
+        binned,
+    })
 }
 
 /// The rows of `data` whose time is outside `[lo, hi)`.
@@ -249,86 +298,139 @@ fn without(data: &Dataset, time: &[f64], lo: f64, hi: f64) -> Dataset {
 }
 
 /// Contiguous blocks of the training run, each predicted by a fit on the rest.
-fn training_blocks(roles: &Roles, data: &Dataset, opts: &ConfirmOptions) -> Result<Vec<Split>> {
+fn training_blocks(
+    roles: &Roles,
+    data: &Dataset,
+    opts: &ConfirmOptions,
+    run: Option<&metrics::Run>,
+) -> Result<Vec<Split>> {
     let t = data.time(&roles.time)?;
-    let (t0, t1) = (
-        t.first().copied().unwrap_or(0.0),
-        t.last().copied().unwrap_or(0.0),
-    );
-    let k = opts.folds.max(2);
-    let edge = |i: usize| t0 + (t1 - t0) * i as f64 / k as f64;
+    let edges = run
+        .and_then(|r| regime_edges(r, opts.folds.max(2)))
+        .unwrap_or_else(|| equal_edges(t, opts.folds.max(2)));
     let mut out = Vec::new();
-    for i in 0..k {
-        let (lo, hi) = (
-            edge(i),
-            if i + 1 == k {
-                f64::INFINITY
-            } else {
-                edge(i + 1)
-            },
-        );
-        let test = data.select_time(&roles.time, lo, hi)?;
+    for w in edges.windows(2) {
+        let (lo, hi) = (w[0], w[1]);
+        let block = data.select_time(&roles.time, lo, hi)?;
         let bin_s =
-            tcomp_train::features::adaptive_bin(test.time(&roles.time)?, opts.heldout_bin_s, 10);
+            tcomp_train::features::adaptive_bin(block.time(&roles.time)?, opts.heldout_bin_s, 10);
         out.push(Split {
             train: without(data, t, lo, hi),
-            test,
+            test: data.clone(),
             bin_s,
+            score: Some((lo, hi)),
         });
     }
     Ok(out)
 }
 
+/// `k` equal blocks of the run's time span (the last one open-ended).
+fn equal_edges(t: &[f64], k: usize) -> Vec<f64> {
+    let (t0, t1) = (
+        t.first().copied().unwrap_or(0.0),
+        t.last().copied().unwrap_or(0.0),
+    );
+    let mut e: Vec<f64> = (0..k)
+        .map(|i| t0 + (t1 - t0) * i as f64 / k as f64)
+        .collect();
+    e.push(f64::INFINITY);
+    e
+}
+
+/// One block per temperature ramp, from its start to the next ramp's start (the hold after it
+/// included; the first block from the run's start), when the run has between 3 and
+/// `2 × folds` ramps. Why: a block that cuts a ramp in two leaves its other half in the fit, so the
+/// held-out half is interpolated, not predicted; holding out a whole ramp asks the fit on the
+/// others to predict a regime it has not seen — what a verification run on another profile
+/// asks, from the training run alone.
+fn regime_edges(run: &metrics::Run, folds: usize) -> Option<Vec<f64>> {
+    let ramps: Vec<f64> = metrics::segment_table(run)
+        .iter()
+        .filter(|s| s.kind != "hold")
+        .map(|s| s.start_s)
+        .collect();
+    if !(3..=2 * folds).contains(&ramps.len()) {
+        return None;
+    }
+    let mut e = vec![f64::NEG_INFINITY];
+    e.extend(ramps.iter().skip(1));
+    e.push(f64::INFINITY);
+    Some(e)
+}
+
 /// The held-out splits of the verdict: the verification run, or the training run's blocks.
-fn splits(
+fn verification_split(
     roles: &Roles,
     data: &Dataset,
     verify: Option<&Dataset>,
     opts: &ConfirmOptions,
-    blocks: &[Split],
-) -> Result<(Vec<Split>, String)> {
-    if let Some(v) = verify {
-        let bin_s =
-            tcomp_train::features::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
-        let split = Split {
-            train: data.clone(),
-            test: v.clone(),
-            bin_s,
-        };
-        return Ok((vec![split], format!("verification run {}", v.file())));
-    }
-    Ok((
+) -> Result<Option<(Split, String)>> {
+    let Some(v) = verify else {
+        return Ok(None);
+    };
+    let bin_s = tcomp_train::features::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
+    let split = Split {
+        train: data.clone(),
+        test: v.clone(),
+        bin_s,
+        score: None,
+    };
+    Ok(Some((split, format!("verification run {}", v.file()))))
+}
+
+/// The training run's contiguous blocks as the splits the criterion reads.
+fn block_splits(blocks: &[Split]) -> (Vec<Split>, String) {
+    (
         blocks
             .iter()
             .map(|b| Split {
                 train: b.train.clone(),
                 test: b.test.clone(),
                 bin_s: b.bin_s,
+                score: b.score,
             })
             .collect(),
         format!(
-            "{} contiguous blocks of the training run, each predicted by a fit on the rest",
+            "{} blocks of the training run (one per temperature ramp when it has a few), each \
+             predicted by a fit on the rest",
             blocks.len()
         ),
-    ))
+    )
+}
+
+/// The runs a confirmation reads.
+#[derive(Clone, Copy)]
+pub struct Runs<'a> {
+    /// The training run (the rows diagnosed).
+    pub data: &'a Dataset,
+    /// The verification run, reported only.
+    pub verify: Option<&'a Dataset>,
+    /// The model as given, run over `data`: its temperature ramps make the training run's blocks.
+    pub run: Option<&'a metrics::Run>,
 }
 
 /// Refits the leading candidates (their parameters estimated first, on the binned training run of
 /// `prepared`) and replaces their held-out figures with the real ones; every other candidate is
-/// marked unconfirmed. The refits split the run at the gaps `prepared` does. Returns the refitted
-/// base's held-out residual.
+/// marked unconfirmed. The refits split the run at the gaps `prepared` does.
+///
+/// Honest selection: the held-out figures the criterion reads come from blocks of the training run
+/// (one per temperature ramp when it has a few, see [`regime_edges`]), each predicted by a fit on
+/// the rest; a verification run, when given, is refitted
+/// too but only reported ([`Confirmation::verification`]) — it is used once, to say how the
+/// choice fares, never to make it. Returns the refitted base's figures.
 pub fn confirm(
     info: &ModelInfo,
     roles: &Roles,
-    data: &Dataset,
-    verify: Option<&Dataset>,
+    runs: Runs<'_>,
     cands: &mut [Scored],
     opts: &ConfirmOptions,
     prepared: &Prepared,
-) -> Result<f64> {
+) -> Result<BaseRefit> {
+    let Runs { data, verify, run } = runs;
     let refits = Refits::new(info, roles, data, prepared.gap_s);
-    let blocks = training_blocks(roles, data, opts)?;
-    let (splits, heldout) = splits(roles, data, verify, opts, &blocks)?;
+    let blocks = training_blocks(roles, data, opts, run)?;
+    let (splits, heldout) = block_splits(&blocks);
+    let verification = verification_split(roles, data, verify, opts)?;
     let mut order: Vec<usize> = (0..cands.len())
         .filter(|&i| cands[i].delta_log_evidence >= 0.0)
         .collect();
@@ -357,13 +459,23 @@ pub fn confirm(
         .map(|job| {
             let features = refits.features(job.and_then(|i| cands.get(i)));
             let figures = heldout_std(&refits, &splits, &features)?;
-            Ok((figures, refits.log_evidence(&features)))
+            let checked = verification
+                .as_ref()
+                .map(|(sp, _)| heldout_std(&refits, std::slice::from_ref(sp), &features))
+                .transpose()?;
+            Ok((figures, checked, refits.log_evidence(&features)))
         })
         .collect();
     let mut results = results.into_iter();
-    let ((before, before_each), base_evidence) = results
+    let (base_figures, base_checked, base_evidence) = results
         .next()
-        .unwrap_or(Ok(((f64::NAN, Vec::new()), f64::NAN)))?;
+        .unwrap_or_else(|| Err(crate::DiscoverError::Invalid("no base refit".into())))?;
+    let before = base_figures.pooled;
+    let base = BaseRefit {
+        residual_std: before,
+        noise_floor: crate::design::floor_estimate(&base_figures.binned),
+        verification_std: base_checked.as_ref().map(|f| f.pooled),
+    };
     let mut outcome: Vec<(usize, std::result::Result<Refitted, String>)> = Vec::new();
     for (&i, r) in order.iter().zip(results) {
         outcome.push((i, r.map_err(|e| e.to_string())));
@@ -378,14 +490,25 @@ pub fn confirm(
     for (i, r) in outcome {
         let Some(c) = cands.get_mut(i) else { continue };
         match r {
-            Ok(((after, after_each), evidence)) => {
+            Ok((figures, checked, evidence)) => {
+                let after = figures.pooled;
                 let improvement_pct = 100.0 * (1.0 - after / before);
-                let splits_improved = after_each
+                let splits_improved = figures
+                    .each
                     .iter()
-                    .zip(&before_each)
+                    .zip(&base_figures.each)
                     .filter(|(a, b)| a < b)
                     .count();
-                let n = after_each.len();
+                let n = figures.each.len();
+                let verification = match (&verification, checked, base.verification_std) {
+                    (Some((_, run)), Some(c), Some(b)) => Some(Verification {
+                        run: run.clone(),
+                        residual_std_before: b,
+                        residual_std_after: c.pooled,
+                        change_pct: 100.0 * (c.pooled / b - 1.0),
+                    }),
+                    _ => None,
+                };
                 c.confirmation = Some(Confirmation {
                     residual_std_before: before,
                     residual_std_after: after,
@@ -394,6 +517,7 @@ pub fn confirm(
                     splits_improved,
                     splits: n,
                     delta_log_evidence_refit: evidence - base_evidence,
+                    verification,
                 });
                 c.residual_std_before = before;
                 c.residual_std_after = after;
@@ -407,5 +531,5 @@ pub fn confirm(
             Err(e) => c.unconfirmed = Some(format!("the refit with it failed: {e}")),
         }
     }
-    Ok(before)
+    Ok(base)
 }

@@ -154,6 +154,11 @@ pub struct Diagnosis {
     /// Held-out residual of the base feature set refitted by the trainer (the "before" of every
     /// confirmed candidate).
     pub refit_residual_std_before: f64,
+    /// The same refit's residual on the verification run, when there is one (reported only).
+    pub refit_verification_std_before: Option<f64>,
+    /// The noise floor the criterion measured removals against: estimated from the training
+    /// blocks' held-out residual.
+    pub criterion_noise_floor: f64,
     /// Wall time of the diagnosis (s).
     pub elapsed_s: f64,
 }
@@ -231,16 +236,13 @@ pub fn diagnose(
                 .into(),
         });
     }
-    let refit_before = confirm::confirm(
-        &info,
-        &roles,
+    let runs = confirm::Runs {
         data,
         verify,
-        &mut cands,
-        &opts.confirm,
-        &prepared,
-    )?;
-    opts.criterion.apply(&prepared.figures, &mut cands);
+        run: Some(&run),
+    };
+    let refit_before = confirm::confirm(&info, &roles, runs, &mut cands, &opts.confirm, &prepared)?;
+    opts.criterion.apply(refit_before.noise_floor, &mut cands);
     let (verdict, verdict_text) = verdict::decide(&cands);
     let diagnosis = Diagnosis {
         verdict,
@@ -261,7 +263,9 @@ pub fn diagnose(
         worst_intervals: worst,
         verify_segments: vsegs,
         verify_worst_intervals: vworst,
-        refit_residual_std_before: refit_before,
+        refit_residual_std_before: refit_before.residual_std,
+        refit_verification_std_before: refit_before.verification_std,
+        criterion_noise_floor: refit_before.noise_floor,
         elapsed_s: t0.elapsed().as_secs_f64(),
     };
     Ok(Analysis {

@@ -25,9 +25,10 @@
 //! say which). A candidate that only re-states a feature the model has (its rate with a longer
 //! window) is a refinement, named as such and never as a missing effect.
 
-use crate::score::{BaseFigures, Scored};
+use crate::score::Scored;
 use serde::Serialize;
 use tcomp_train::TrainError;
+use tcomp_train::num::{SIG, change_pct, pct, plain, signed};
 use tcomp_train::options::Bound;
 // `--min-evidence` and `--min-improvement` (and the strong-improvement threshold) are bounded by
 // the trainer's one table, which the command line parses with too.
@@ -88,7 +89,9 @@ impl Criterion {
             "a candidate is a missing effect when (1) Δ log evidence ≥ {} on binned training data \
              (or ≥ 0 with a held-out improvement ≥ {} %), (2) the held-out residual falls by ≥ {} %, \
              and (3) the held-out error it removes, √(before² − after²), is ≥ {}× the noise floor \
-             estimated from the held-out residual",
+             estimated from the held-out residual — held out meaning contiguous blocks of the \
+             training run, each predicted by a fit on the rest (a verification run is only \
+             reported: it never chooses)",
             self.min_delta_log_evidence,
             self.strong_improvement_pct,
             self.min_improvement_pct,
@@ -98,7 +101,9 @@ impl Criterion {
 
     /// Marks each candidate as passing or not (with the reasons) and sorts: passing first, then by
     /// Δ log evidence.
-    pub fn apply(&self, base: &BaseFigures, cands: &mut [Scored]) {
+    /// `noise_floor` is the one estimated from the training blocks' held-out residual
+    /// ([`crate::confirm::BaseRefit::noise_floor`]).
+    pub fn apply(&self, noise_floor: f64, cands: &mut [Scored]) {
         for c in cands.iter_mut() {
             let mut fails = Vec::new();
             let strong =
@@ -118,11 +123,14 @@ impl Criterion {
             let removed = (c.residual_std_before.powi(2) - c.residual_std_after.powi(2))
                 .max(0.0)
                 .sqrt();
-            let need = self.min_removed_vs_floor * base.noise_floor_estimate;
+            let need = self.min_removed_vs_floor * noise_floor;
             if removed < need {
                 fails.push(format!(
-                    "removes {removed:.3e} of held-out error < {need:.3e} ({}× noise floor {:.3e})",
-                    self.min_removed_vs_floor, base.noise_floor_estimate
+                    "removes {} of held-out error < {} ({}× noise floor {})",
+                    plain(removed, SIG),
+                    plain(need, SIG),
+                    self.min_removed_vs_floor,
+                    plain(noise_floor, SIG)
                 ));
             }
             if let Some(why) = &c.unconfirmed {
@@ -196,31 +204,51 @@ fn estimate_text(c: &Scored) -> String {
     })
 }
 
+/// The held-out figures of `c` in words: over the training run's blocks (what chose it), and on
+/// the verification run when there is one (what it is reported on).
+fn heldout_text(c: &Scored) -> String {
+    let mut t = format!(
+        "held-out residual {} → {} ({})",
+        plain(c.residual_std_before, SIG),
+        plain(c.residual_std_after, SIG),
+        pct(change_pct(c.residual_std_before, c.residual_std_after))
+    );
+    if let Some(v) = c
+        .confirmation
+        .as_ref()
+        .and_then(|k| k.verification.as_ref())
+    {
+        t += &format!(
+            "; on the verification run {} → {} ({})",
+            plain(v.residual_std_before, SIG),
+            plain(v.residual_std_after, SIG),
+            pct(Some(v.change_pct))
+        );
+    }
+    t
+}
+
 /// The verdict for sorted candidates, with a sentence.
 pub fn decide(cands: &[Scored]) -> (Verdict, String) {
     match cands.first() {
         Some(c) if c.passes && c.refines.is_none() => (
             Verdict::MissingEffect,
             format!(
-                "missing effect: {} — {} (Δ log evidence {:+.1}; held-out residual {:.3e} → {:.3e}, {:.1} % lower{})",
+                "missing effect: {} — {} (Δ log evidence {}; {}{})",
                 c.effect,
                 instruction(c),
-                c.delta_log_evidence,
-                c.residual_std_before,
-                c.residual_std_after,
-                c.improvement_pct,
+                signed(c.delta_log_evidence, 1),
+                heldout_text(c),
                 estimate_text(c)
             ),
         ),
         Some(c) if c.passes => (
             Verdict::None,
             format!(
-                "no significant missing effect; a refinement passes the criterion: {} — {}                  (held-out residual {:.3e} → {:.3e}, {:.1} % lower{})",
+                "no significant missing effect; a refinement passes the criterion: {} — {} ({}{})",
                 c.effect,
                 instruction(c),
-                c.residual_std_before,
-                c.residual_std_after,
-                c.improvement_pct,
+                heldout_text(c),
                 estimate_text(c)
             ),
         ),

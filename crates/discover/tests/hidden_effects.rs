@@ -24,6 +24,24 @@ fn case(sensor: SensorKind, effects: &[EffectKind], hidden: Option<EffectKind>) 
     case_preset(preset, hidden)
 }
 
+/// `case` with the demo's training profile (three ramps: cool, heat, cool at 0.5 °C/min over
+/// −10…40 °C) instead of the preset's two-ramp one (one heating, one cooling). The diagnosis
+/// chooses on the training run alone; a heating/cooling hysteresis shows only between the two
+/// directions, and with one ramp of each, holding either out leaves no example of its direction
+/// in the fit — so a training run for hysteresis needs more than one ramp per direction, as a
+/// chamber profile for it would have.
+fn case_multi_ramp(
+    sensor: SensorKind,
+    effects: &[EffectKind],
+    hidden: Option<EffectKind>,
+) -> Outcome {
+    let mut preset = presets::with_effects(sensor, effects)
+        .unwrap()
+        .with_seed(11);
+    preset.train.profile = tcomp_demo::demo_preset(11).unwrap().train.profile;
+    case_preset(preset, hidden)
+}
+
 fn case_preset(preset: tcomp_sim::Preset, hidden: Option<EffectKind>) -> Outcome {
     let sim = simulated(&preset).unwrap();
     let truth = &sim.train_truth;
@@ -168,7 +186,7 @@ fn hidden_lagged_element() {
 
 #[test]
 fn hidden_hysteresis() {
-    let o = case(
+    let o = case_multi_ramp(
         SensorKind::Ifog,
         &[Poly, Rate, Hysteresis],
         Some(Hysteresis),

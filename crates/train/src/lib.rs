@@ -32,6 +32,7 @@ pub mod layer;
 pub mod method;
 pub mod metrics;
 pub mod mse;
+pub mod num;
 pub mod ols;
 pub mod options;
 pub mod poly3;

@@ -78,6 +78,27 @@ pub struct Run {
     pub restarted: Vec<(usize, f64)>,
 }
 
+impl Run {
+    /// The rows with `lo ≤ time < hi`: a block of a run scored after the model ran over the whole
+    /// run (its state continuous). The flag and gap counts stay the whole run's.
+    pub fn window(self, lo: f64, hi: f64) -> Run {
+        let keep: Vec<bool> = self.time.iter().map(|&t| t >= lo && t < hi).collect();
+        let pick = |v: Vec<f64>| -> Vec<f64> {
+            v.into_iter()
+                .zip(&keep)
+                .filter_map(|(x, &k)| k.then_some(x))
+                .collect()
+        };
+        Run {
+            time: pick(self.time),
+            error: pick(self.error),
+            residual: pick(self.residual),
+            temperature: pick(self.temperature),
+            ..self
+        }
+    }
+}
+
 /// Runs the model through a core [`Channel`] over `data`, carrying the feature state across gaps
 /// as the board does across missed periods (see [`crate::features`]). `temperature` names the
 /// column used for segment detection (default: the program's first input).

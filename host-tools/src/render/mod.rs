@@ -10,4 +10,4 @@
 pub mod candidates;
 pub mod diagnosis;
 pub mod html;
-pub mod num;
+pub use tcomp_train::num;

@@ -5,6 +5,8 @@
 //! Why one module: the tables of `eval`, `diagnose`, `compare`, the demo's narrative and the
 //! report's tables and axes each formatted numbers their own way (`{:.4e}` here, `{:.4}` there), so
 //! one line could mix `9.144e-2` and `0.0914`, and "improvement" and "change" had opposite signs.
+//! It lives in the trainer's library so the libraries' own sentences (discovery's verdicts) and the
+//! command line's tables format alike; the CLI re-exports it as `render::num`.
 //! Every figure a person reads goes through [`num`] (or [`plain`] where the unit is a column
 //! header), every change through [`change_pct`] and [`pct`].
 
