@@ -61,9 +61,14 @@ fn tool_version() -> String {
 }
 
 fn created(args: &Args) -> anyhow::Result<u64> {
-    if let Some(t) = args.created {
-        return Ok(t);
+    match args.created {
+        Some(t) => Ok(t),
+        None => created_now(),
     }
+}
+
+/// An image's creation time: `SOURCE_DATE_EPOCH` (so an image can be rebuilt bit for bit), else now.
+pub fn created_now() -> anyhow::Result<u64> {
     if let Ok(s) = std::env::var("SOURCE_DATE_EPOCH") {
         return s
             .trim()
