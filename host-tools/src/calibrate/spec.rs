@@ -313,7 +313,7 @@ mod tests {
             .map(|e| e.to_string())
             .unwrap_or_default();
         assert!(
-            e.contains("s.toml: line 2, column 29") && e.contains("`avrage`"),
+            e.contains("s.toml: line 2, column 34") && e.contains("`avrage`"),
             "{e}"
         );
         let e = CalSpec::parse(Path::new("s.toml"), "[data]\nlog = \"d\"\nsplit = 3\n")
