@@ -65,7 +65,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let board = spec.board.as_deref().map(Board::load).transpose()?;
     let plans = unit::apply_board(&spec, board.as_ref())?;
     if let Some(dir) = &args.units {
-        return crate::calibrate::fleet::run(args, &spec, &plans, board.as_ref(), dir);
+        let (fleet, json) = crate::calibrate::fleet::run(args, &spec, &plans, board.as_ref(), dir)?;
+        print_fleet(args, &fleet, &json);
+        return Ok(());
     }
     let source = spec.source_in(&spec.base)?;
     let data = UnitData::load(&source)?;
@@ -114,4 +116,37 @@ pub fn write_unit(
     let p = dir.join("summary.json");
     std::fs::write(&p, &json).with_context(|| format!("writing {}", p.display()))?;
     Ok(json)
+}
+
+/// The fleet's outcome: its JSON, or a line and one line per outlier.
+fn print_fleet(args: &Args, fleet: &crate::calibrate::fleet::Fleet, json: &str) {
+    if args.json {
+        outln!("{}", super::printable::json(json));
+        return;
+    }
+    if args.quiet {
+        return;
+    }
+    outln!(
+        "{} units calibrated into {}; outliers ({}): {}",
+        fleet.units,
+        args.out.display(),
+        fleet.rule,
+        if fleet.outlier_units.is_empty() {
+            "none".to_string()
+        } else {
+            fleet.outlier_units.join(", ")
+        }
+    );
+    for o in &fleet.outliers {
+        outln!(
+            "  {} {}: {} = {} (z {})",
+            o.unit,
+            o.channel,
+            o.statistic,
+            crate::render::num::plain(o.value, 4),
+            crate::render::num::signed(o.z, 1)
+        );
+    }
+    outln!("fleet page: {}", args.out.join("fleet.html").display());
 }

@@ -36,4 +36,5 @@ pub mod progress;
 pub mod report;
 mod run;
 pub mod simulate;
+mod simulate_units;
 pub mod stdout;

@@ -18,6 +18,7 @@
 mod bars;
 pub mod calibrate;
 mod figures;
+pub mod fleet;
 mod plot;
 mod tables;
 
