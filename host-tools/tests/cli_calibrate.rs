@@ -185,3 +185,69 @@ fn accept_reports_before_and_after() {
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.contains("model before --accept"));
 }
+
+/// A production line of 20 simulated units with 4 planted outliers (two with doubled polynomial
+/// coefficients, two with ten times the noise): `--units` calibrates each into its own folder with
+/// its own image, and the fleet names exactly the planted units.
+#[test]
+fn a_fleet_names_its_planted_outliers() {
+    let dir = tempfile::tempdir().unwrap();
+    let units = dir.path().join("units");
+    let o = tcomp(&[
+        "simulate",
+        "--preset",
+        "qma",
+        "--units",
+        "20",
+        "--outliers",
+        "4",
+        "--step-s",
+        "5",
+        "--quiet",
+        "--out",
+        units.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let truth: Value =
+        serde_json::from_str(&std::fs::read_to_string(units.join("fleet-truth.json")).unwrap())
+            .unwrap();
+    let mut planted: Vec<String> = truth["outliers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["unit"].as_str().unwrap().to_string())
+        .collect();
+    planted.sort();
+    assert_eq!(planted.len(), 4);
+    let spec = root().join("examples/calibrate/fleet.calibrate.toml");
+    let out = dir.path().join("cal");
+    let o = tcomp(&[
+        "calibrate",
+        spec.to_str().unwrap(),
+        "--units",
+        units.to_str().unwrap(),
+        "--no-diagnosis",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let fleet = &v["fleet"];
+    assert_eq!(fleet["units"], 20);
+    let named: Vec<String> = fleet["outlier_units"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|u| u.as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(named, planted, "{}", fleet["outliers"]);
+    for p in &planted {
+        assert!(out.join(p).join("image.bin").is_file(), "{p}: image");
+        assert!(out.join(p).join("summary.json").is_file(), "{p}: summary");
+    }
+    let html = std::fs::read_to_string(out.join("fleet.html")).unwrap();
+    for p in &planted {
+        assert!(html.contains(p.as_str()), "{p} on the fleet page");
+    }
+}

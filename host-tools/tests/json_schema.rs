@@ -219,3 +219,33 @@ fn no_data_is_null() {
     }
     assert!(eval["residual_std"].as_f64().unwrap() > 0.0);
 }
+
+/// `tcomp calibrate`'s `summary.json` (and its `--json`, the same text) speaks the schema, and the
+/// schema rejects a summary whose shipped choice is not one of model, poly3, raw.
+#[test]
+fn calibrate_summary_speaks_the_schema() {
+    let schema = validator();
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../data/realdata/mems_thermal_cycle.calibrate.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cal");
+    let (text, v) = tcomp(&[
+        "calibrate",
+        spec.to_str().unwrap(),
+        "--accept",
+        "--quiet",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_valid(&schema, "calibrate", &text, &v);
+    let file = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert_eq!(file.trim(), text.trim());
+    assert_eq!(v["channels"].as_array().unwrap().len(), 6);
+    let mut broken = v.clone();
+    broken["channels"][0]["shipped"] = "best".into();
+    assert!(
+        !schema.is_valid(&broken),
+        "the schema must reject shipped = best"
+    );
+}
