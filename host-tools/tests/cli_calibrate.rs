@@ -250,4 +250,38 @@ fn a_fleet_names_its_planted_outliers() {
     for p in &planted {
         assert!(html.contains(p.as_str()), "{p} on the fleet page");
     }
+    // The same line as Slurm array tasks (the example script as written, one task per unit),
+    // then `--collect`: the same outliers.
+    let script = root().join("examples/calibrate/slurm-array.sh");
+    let batch = dir.path().join("batch");
+    for task in 0..20 {
+        let o = Command::new("bash")
+            .arg(&script)
+            .arg(&spec)
+            .arg(&units)
+            .arg(&batch)
+            .env("SLURM_ARRAY_TASK_ID", task.to_string())
+            .env("TCOMP", env!("CARGO_BIN_EXE_tcomp"))
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "task {task}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let o = tcomp(&[
+        "calibrate",
+        spec.to_str().unwrap(),
+        "--collect",
+        batch.to_str().unwrap(),
+        "--json",
+        "--out",
+        batch.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["fleet"]["units"], 20);
+    assert_eq!(v["fleet"]["outlier_units"], fleet["outlier_units"]);
+    assert!(batch.join("unit-0001/report.html").is_file());
 }

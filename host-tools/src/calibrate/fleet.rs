@@ -128,49 +128,9 @@ pub fn units_in(spec: &CalSpec, dir: &Path) -> anyhow::Result<Vec<UnitEntry>> {
     entries.sort();
     let mut units = Vec::new();
     for p in entries {
-        let Some(name) = p.file_name().map(|n| n.to_string_lossy().into_owned()) else {
-            continue;
-        };
-        if name.starts_with('.') {
-            continue;
+        if let Some(e) = entry(spec, &p, units.len() as u64 + 1)? {
+            units.push(e);
         }
-        let source = if p.is_dir() {
-            spec.source_in(&p)?
-        } else if name.ends_with(".csv") || name.ends_with(".csv.gz") {
-            let Some(split_s) = spec.data.split_s else {
-                bail!(
-                    "--units {}: {name} is a log file, and {} has no split-s to split it at",
-                    dir.display(),
-                    spec.path.display()
-                );
-            };
-            DataSource::Split {
-                log: p.clone(),
-                split_s,
-            }
-        } else {
-            continue;
-        };
-        let digits: String = name
-            .trim_end_matches(".gz")
-            .trim_end_matches(".csv")
-            .chars()
-            .rev()
-            .take_while(char::is_ascii_digit)
-            .collect::<Vec<_>>()
-            .into_iter()
-            .rev()
-            .collect();
-        let serial = digits.parse().unwrap_or(units.len() as u64 + 1);
-        let name = name
-            .trim_end_matches(".gz")
-            .trim_end_matches(".csv")
-            .to_string();
-        units.push(UnitEntry {
-            name,
-            serial,
-            source,
-        });
     }
     if units.is_empty() {
         bail!(
@@ -179,6 +139,112 @@ pub fn units_in(spec: &CalSpec, dir: &Path) -> anyhow::Result<Vec<UnitEntry>> {
         );
     }
     Ok(units)
+}
+
+/// The unit at `path` (a folder holding the spec's `[data]` files, or a log file split at the
+/// spec's `split-s`); `None` for anything else (a hidden file, `fleet-truth.json`). Its serial is
+/// the number its name ends in, else `fallback`.
+pub fn entry(spec: &CalSpec, path: &Path, fallback: u64) -> anyhow::Result<Option<UnitEntry>> {
+    let Some(file_name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else {
+        return Ok(None);
+    };
+    if file_name.starts_with('.') {
+        return Ok(None);
+    }
+    let name = file_name
+        .trim_end_matches(".gz")
+        .trim_end_matches(".csv")
+        .to_string();
+    let source = if path.is_dir() {
+        spec.source_in(path)?
+    } else if file_name.ends_with(".csv") || file_name.ends_with(".csv.gz") {
+        let Some(split_s) = spec.data.split_s else {
+            bail!(
+                "{} is a log file, and {} has no split-s to split it at",
+                path.display(),
+                spec.path.display()
+            );
+        };
+        DataSource::Split {
+            log: path.to_path_buf(),
+            split_s,
+        }
+    } else {
+        return Ok(None);
+    };
+    let digits: String = name
+        .chars()
+        .rev()
+        .take_while(char::is_ascii_digit)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .rev()
+        .collect();
+    let serial = digits.parse().unwrap_or(fallback);
+    Ok(Some(UnitEntry {
+        name,
+        serial,
+        source,
+    }))
+}
+
+/// The fleet's rows from the `summary.json` of each unit folder in `dir` (the outputs of
+/// per-unit batch jobs: `tcomp calibrate SPEC --unit UNIT --out DIR/UNIT`).
+pub fn collect(plans: &[ChannelPlan], dir: &Path) -> anyhow::Result<Vec<UnitRow>> {
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("--collect {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.join("summary.json").is_file())
+        .collect();
+    dirs.sort();
+    if dirs.is_empty() {
+        bail!(
+            "--collect {}: no unit folder with a summary.json in it",
+            dir.display()
+        );
+    }
+    dirs.iter().map(|d| row_of_summary(plans, d)).collect()
+}
+
+/// One unit's row from its `summary.json`.
+fn row_of_summary(plans: &[ChannelPlan], d: &Path) -> anyhow::Result<UnitRow> {
+    let p = d.join("summary.json");
+    let v: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?,
+    )
+    .with_context(|| format!("{}", p.display()))?;
+    let unit = d
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let chans = v["channels"].as_array().cloned().unwrap_or_default();
+    let channels = plans
+        .iter()
+        .map(|plan| {
+            let c = chans
+                .iter()
+                .find(|c| c["name"] == plan.name.as_str())
+                .with_context(|| format!("{}: no channel `{}`", p.display(), plan.name))?;
+            Ok(UnitChannel {
+                residual_rms: c["heldout"]["residual_rms"].as_f64(),
+                raw_rms: c["heldout"]["raw_rms"].as_f64(),
+                shipped: match c["shipped"].as_str() {
+                    Some("poly3") => "poly3",
+                    Some("raw") => "raw",
+                    _ => "model",
+                },
+                flags: c["flags"].as_array().map_or(0, Vec::len),
+                coefficients: c["poly3_coefficients"]
+                    .as_array()
+                    .map(|a| a.iter().filter_map(serde_json::Value::as_f64).collect())
+                    .unwrap_or_default(),
+            })
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    Ok(UnitRow {
+        unit,
+        serial: v["serial"].as_u64().unwrap_or(0),
+        channels,
+    })
 }
 
 /// Median of `v` (sorted in place); `None` when empty.
@@ -352,11 +418,24 @@ pub fn run(
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
     bar.finish_and_clear();
+    let (fleet, json) = write_fleet(plans, rows, spec, dir, staging.path())?;
+    staging.commit()?;
+    Ok((fleet, json))
+}
+
+/// Analyses the rows and writes `fleet.html` and `fleet.json` into `into`.
+pub fn write_fleet(
+    plans: &[ChannelPlan],
+    rows: Vec<UnitRow>,
+    spec: &CalSpec,
+    units: &Path,
+    into: &Path,
+) -> anyhow::Result<(Fleet, String)> {
     let fleet = analyse(plans, rows);
     let html = crate::render::html::fleet::page(&fleet, spec);
-    std::fs::write(staging.path().join("fleet.html"), html).context("writing fleet.html")?;
+    std::fs::write(into.join("fleet.html"), html).context("writing fleet.html")?;
     let subject = crate::cmd::json::Subject {
-        data: Some(dir.display().to_string()),
+        data: Some(units.display().to_string()),
         ..Default::default()
     };
     let json = serde_json::to_string_pretty(&crate::cmd::json::Output {
@@ -364,7 +443,6 @@ pub fn run(
         subject: &subject,
         body: &serde_json::json!({ "fleet": &fleet }),
     })?;
-    std::fs::write(staging.path().join("fleet.json"), &json).context("writing fleet.json")?;
-    staging.commit()?;
+    std::fs::write(into.join("fleet.json"), &json).context("writing fleet.json")?;
     Ok((fleet, json))
 }

@@ -92,6 +92,9 @@ pub struct ChannelSummary {
     pub model_file: String,
     /// The poly3 baseline's blob.
     pub poly3_file: String,
+    /// The poly3 baseline's coefficients (linear weights of T, T², T³ on normalised features):
+    /// what `--units` and `--collect` compare across units.
+    pub poly3_coefficients: Vec<f64>,
     /// Training rows.
     pub train: Window,
     /// Held-out rows and figures.
@@ -157,6 +160,7 @@ pub fn channel(c: &ChannelResult, u: &UnitResult) -> ChannelSummary {
         features: c.model.summary.features.clone(),
         model_file: blob_name(&c.plan.name, ""),
         poly3_file: blob_name(&c.plan.name, "poly3"),
+        poly3_coefficients: c.poly3.summary.linear.clone(),
         train: window(&train_file, c.train_span, c.train_rows),
         heldout: Heldout {
             window: window(&verify_file, c.verify_span, c.verify_rows),

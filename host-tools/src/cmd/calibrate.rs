@@ -28,8 +28,16 @@ pub struct Args {
     /// A folder of units: each subfolder (its files named as in [data]) or log file (split at
     /// split-s) is one unit, calibrated with the same spec; writes one folder per unit and a
     /// fleet page.
-    #[arg(long, value_name = "DIR")]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["unit", "collect"])]
     pub units: Option<PathBuf>,
+    /// One unit of such a folder (a batch job's share of a fleet: its serial is the number its
+    /// name ends in, its [data] files are looked up in it); writes the single-unit outputs.
+    #[arg(long, value_name = "PATH", conflicts_with = "collect")]
+    pub unit: Option<PathBuf>,
+    /// The fleet page of units calibrated one by one (by batch jobs with --unit): reads each
+    /// DIR/*/summary.json and writes fleet.html and fleet.json into --out.
+    #[arg(long, value_name = "DIR")]
+    pub collect: Option<PathBuf>,
     /// Refit each channel with the effect its diagnosis confirmed (on the training run) and
     /// report before and after.
     #[arg(long)]
@@ -69,7 +77,27 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         print_fleet(args, &fleet, &json);
         return Ok(());
     }
-    let source = spec.source_in(&spec.base)?;
+    if let Some(dir) = &args.collect {
+        let rows = crate::calibrate::fleet::collect(&plans, dir)?;
+        let staging = Staging::new("--out", &args.out)?;
+        let (fleet, json) =
+            crate::calibrate::fleet::write_fleet(&plans, rows, &spec, dir, staging.path())?;
+        staging.commit()?;
+        print_fleet(args, &fleet, &json);
+        return Ok(());
+    }
+    let (source, serial) = match &args.unit {
+        Some(u) => {
+            let e = crate::calibrate::fleet::entry(&spec, u, spec.serial)?.ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--unit {}: neither a folder nor a .csv/.csv.gz log",
+                    u.display()
+                )
+            })?;
+            (e.source, e.serial)
+        }
+        None => (spec.source_in(&spec.base)?, spec.serial),
+    };
     let data = UnitData::load(&source)?;
     let mut inputs: Vec<(&str, &std::path::Path)> = vec![("SPEC", args.spec.as_path())];
     inputs.push(("[data]", data.train_file.as_path()));
@@ -82,7 +110,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let u = unit::run(
         &plans,
         data,
-        spec.serial,
+        serial,
         board.as_ref(),
         args.settings(),
         &|| bar.inc(1),
