@@ -446,3 +446,39 @@ pub fn write_fleet(
     std::fs::write(into.join("fleet.json"), &json).context("writing fleet.json")?;
     Ok((fleet, json))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_and_mad_name_a_far_unit_and_not_its_neighbours() {
+        // 19 units spread ±1 around 10 and one at 30: the mean/std rule would be dragged by it.
+        let mut values: Vec<(String, f64)> = (0..19)
+            .map(|i| (format!("u{i}"), 10.0 + (f64::from(i) - 9.0) / 9.0))
+            .collect();
+        values.push(("far".into(), 30.0));
+        let (s, o) = spread_and_outliers("c", "rms", &values).unwrap_or_else(|| {
+            (
+                Spread {
+                    statistic: String::new(),
+                    median: 0.0,
+                    robust_sigma: 0.0,
+                    min: 0.0,
+                    max: 0.0,
+                    units: 0,
+                },
+                Vec::new(),
+            )
+        });
+        assert_eq!(s.units, 20);
+        assert!((s.median - 10.0556).abs() < 1e-3, "{}", s.median);
+        let named: Vec<&str> = o.iter().map(|o| o.unit.as_str()).collect();
+        assert_eq!(named, ["far"]);
+        // A unit at 5 robust σ exactly is not named: the rule is strictly greater.
+        let edge = s.median + Z_OUTLIER * s.robust_sigma;
+        values.push(("edge".into(), edge));
+        let (_, o) = spread_and_outliers("c", "rms", &values).unwrap_or((s, Vec::new()));
+        assert!(o.iter().all(|o| o.unit != "edge"));
+    }
+}
