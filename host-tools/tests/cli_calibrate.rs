@@ -183,7 +183,7 @@ fn accept_reports_before_and_after() {
         "the MEMS cycle's diagnosis confirms a lag on some channel"
     );
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
-    assert!(html.contains("model before --accept"));
+    assert!(html.contains("before --accept"));
 }
 
 /// A production line of 20 simulated units with 4 planted outliers (two with doubled polynomial

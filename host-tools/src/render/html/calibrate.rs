@@ -30,9 +30,23 @@ fn overview(h: &mut String, u: &UnitResult) {
         let status = if c.choice.flags.is_empty() {
             "ok".to_string()
         } else {
+            let worse: Vec<&str> = ["RAW", "POLY3"]
+                .into_iter()
+                .filter(|w| {
+                    c.choice
+                        .flags
+                        .iter()
+                        .any(|f| f.contains(&format!("THAN {w}")))
+                })
+                .collect();
+            let all = esc(&c.choice.flags.join("; "));
+            let short = if worse.is_empty() {
+                all.clone()
+            } else {
+                format!("model worse than {}", worse.join(" and ").to_lowercase())
+            };
             format!(
-                "<span style=\"color:#b71c1c;font-weight:bold\">FLAGGED: {}</span>",
-                esc(&c.choice.flags.join("; "))
+                "<span style=\"color:#b71c1c;font-weight:bold\" title=\"{all}\">FLAGGED: {short}</span>"
             )
         };
         let _ = writeln!(
@@ -89,7 +103,7 @@ fn section(h: &mut String, u: &UnitResult, c: &ChannelResult) {
         h.push_str("<p>The diagnosis below ran on the training run only (contiguous blocks held out in turn); the plots show the held-out run.</p>\n");
     }
     let mut models = vec![ModelRun {
-        name: format!("model ({})", c.model.summary.method),
+        name: c.model.summary.method.to_string(),
         run: c.model.run.clone(),
     }];
     models.push(ModelRun {
@@ -98,7 +112,7 @@ fn section(h: &mut String, u: &UnitResult, c: &ChannelResult) {
     });
     if let Some(a) = &c.accepted {
         models.push(ModelRun {
-            name: "model before --accept".into(),
+            name: "before --accept".into(),
             run: a.before.run.clone(),
         });
     }
