@@ -167,11 +167,10 @@ pub fn run(plan: &ChannelPlan, w: &Windows<'_>, s: Settings) -> anyhow::Result<C
         model.figures.residual_rms,
         s.gate,
     );
-    let temperature = final_opts.spec.features.first().and_then(|_| {
-        tcomp_train::blob_io::decode(std::path::Path::new(name), &model.bytes)
-            .ok()
-            .and_then(|m| m.program.inputs.first().map(|s| s.to_string()))
-    });
+    // The segment temperature: the model's first input, as `tcomp report` takes it.
+    let temperature = tcomp_train::blob_io::decode(std::path::Path::new(name), &model.bytes)
+        .ok()
+        .and_then(|m| m.program.inputs.first().map(|s| s.to_string()));
     Ok(ChannelResult {
         unit: final_opts.unit.clone(),
         train_rows: w.train.len(),
