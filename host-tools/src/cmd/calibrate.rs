@@ -78,7 +78,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         return Ok(());
     }
     if let Some(dir) = &args.collect {
-        let rows = crate::calibrate::fleet::collect(&plans, dir)?;
+        let rows = crate::calibrate::collect::collect(&plans, dir)?;
         let staging = Staging::new("--out", &args.out)?;
         let (fleet, json) =
             crate::calibrate::fleet::write_fleet(&plans, rows, &spec, dir, staging.path())?;
