@@ -85,6 +85,17 @@ pub struct Spread {
     pub units: usize,
 }
 
+/// One channel's spreads.
+#[derive(Clone, Debug, Serialize)]
+pub struct ChannelSpread {
+    /// Channel name.
+    pub name: String,
+    /// Unit of the residual.
+    pub unit: String,
+    /// Each statistic's spread.
+    pub spreads: Vec<Spread>,
+}
+
 /// A unit named an outlier.
 #[derive(Clone, Debug, Serialize)]
 pub struct Outlier {
@@ -110,7 +121,7 @@ pub struct Fleet {
     /// Threshold on |z|.
     pub z_threshold: f64,
     /// Per channel, the spread of each statistic.
-    pub channels: Vec<(String, Vec<Spread>)>,
+    pub channels: Vec<ChannelSpread>,
     /// Outliers, one per (unit, channel, statistic).
     pub outliers: Vec<Outlier>,
     /// The units named, once each.
@@ -277,7 +288,13 @@ pub fn analyse(plans: &[ChannelPlan], rows: Vec<UnitRow>) -> Fleet {
                 outliers.extend(o);
             }
         }
-        channels.push((p.name.clone(), spreads));
+        channels.push(ChannelSpread {
+            name: p.name.clone(),
+            unit: super::channel::options(p, None)
+                .map(|o| o.unit)
+                .unwrap_or_default(),
+            spreads,
+        });
     }
     let mut outlier_units: Vec<String> = outliers.iter().map(|o| o.unit.clone()).collect();
     outlier_units.sort();

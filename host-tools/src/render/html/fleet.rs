@@ -10,7 +10,7 @@ use crate::render::num;
 use std::fmt::Write as _;
 
 /// The residual of every unit of channel `ci`, by unit number.
-fn residual_plot(f: &Fleet, ci: usize, name: &str) -> String {
+fn residual_plot(f: &Fleet, ci: usize, name: &str, unit: &str) -> String {
     let mut xs = Vec::new();
     let mut ys = Vec::new();
     let mut colors = Vec::new();
@@ -29,7 +29,11 @@ fn residual_plot(f: &Fleet, ci: usize, name: &str) -> String {
     let mut p = Plot::new(
         &format!("{name}: held-out residual RMS per unit"),
         "unit (in folder order)",
-        "held-out residual RMS",
+        &if unit.is_empty() {
+            "held-out residual RMS".to_string()
+        } else {
+            format!("held-out residual RMS ({unit})")
+        },
         (0.0, xs.len() as f64 + 1.0),
         (lo, hi),
     );
@@ -71,7 +75,8 @@ pub fn page(f: &Fleet, spec: &CalSpec) -> String {
         }
         h.push_str("</table></div>\n");
     }
-    for (ci, (name, spreads)) in f.channels.iter().enumerate() {
+    for (ci, c) in f.channels.iter().enumerate() {
+        let (name, spreads) = (&c.name, &c.spreads);
         let _ = writeln!(h, "<h2>{}</h2>", esc(name));
         h.push_str("<div class=\"scroll\"><table><tr><th>statistic</th><th>median</th><th>robust σ (1.4826·MAD)</th><th>min</th><th>max</th><th>units</th></tr>\n");
         for s in spreads {
@@ -87,7 +92,7 @@ pub fn page(f: &Fleet, spec: &CalSpec) -> String {
             );
         }
         h.push_str("</table></div>\n");
-        h.push_str(&residual_plot(f, ci, name));
+        h.push_str(&residual_plot(f, ci, name, &c.unit));
     }
     tail(&mut h);
     h
