@@ -10,6 +10,7 @@
 //! by its reader (`tcomp … | head`) ends the run quietly with 0; any other failure to write it is an
 //! error.
 
+mod calibrate;
 mod cmd;
 mod demo;
 mod render;
@@ -49,6 +50,9 @@ enum Command {
     Demo(cmd::demo::Args),
     /// Decode a capture of the firmware's serial output frames into CSV (or JSON).
     Frames(cmd::frames::Args),
+    /// Calibrate a whole unit (or a folder of units) from one spec: fit, verify on held-out data,
+    /// diagnose, report, and pack the image.
+    Calibrate(Box<cmd::calibrate::Args>),
     /// Replace a unit's model image over its serial link (A/B slots, verified, committed last).
     Flash(cmd::flash::Args),
 }
@@ -79,6 +83,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Eval(args) => cmd::eval::run(&args),
         Command::Simulate(args) => cmd::simulate::run(&args),
         Command::Image(args) => cmd::image::run(&args),
+        Command::Calibrate(args) => cmd::calibrate::run(&args),
         Command::Diagnose(args) => cmd::diagnose::run(&args),
         Command::Compare(args) => cmd::compare::run(&args),
         Command::Report(args) => cmd::report::run(&args),

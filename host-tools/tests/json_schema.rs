@@ -221,3 +221,69 @@ fn no_data_is_null() {
     }
     assert!(eval["residual_std"].as_f64().unwrap() > 0.0);
 }
+
+/// `tcomp calibrate`'s `summary.json` (and its `--json`, the same text) speaks the schema, and the
+/// schema rejects a summary whose shipped choice is not one of model, poly3, raw.
+#[test]
+fn calibrate_summary_speaks_the_schema() {
+    let schema = validator();
+    let spec = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../data/realdata/mems_thermal_cycle.calibrate.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cal");
+    let (text, v) = tcomp(&[
+        "calibrate",
+        spec.to_str().unwrap(),
+        "--accept",
+        "--quiet",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_valid(&schema, "calibrate", &text, &v);
+    let file = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert_eq!(file.trim(), text.trim());
+    assert_eq!(v["channels"].as_array().unwrap().len(), 6);
+    let mut broken = v.clone();
+    broken["channels"][0]["shipped"] = "best".into();
+    assert!(
+        !schema.is_valid(&broken),
+        "the schema must reject shipped = best"
+    );
+}
+
+/// `tcomp calibrate --units`'s `fleet.json` (its `--json`) speaks the schema too.
+#[test]
+fn calibrate_fleet_speaks_the_schema() {
+    let schema = validator();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let dir = tempfile::tempdir().unwrap();
+    let units = dir.path().join("units");
+    let status = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+        .args([
+            "simulate", "--preset", "qma", "--units", "6", "--step-s", "10", "--quiet",
+        ])
+        .arg("--out")
+        .arg(&units)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let spec = root.join("examples/calibrate/fleet.calibrate.toml");
+    let out = dir.path().join("cal");
+    let (text, v) = tcomp(&[
+        "calibrate",
+        spec.to_str().unwrap(),
+        "--units",
+        units.to_str().unwrap(),
+        "--no-diagnosis",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_valid(&schema, "calibrate --units", &text, &v);
+    assert_eq!(v["fleet"]["units"], 6);
+    let unit: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("unit-0001/summary.json")).unwrap())
+            .unwrap();
+    assert_valid(&schema, "unit summary", "", &unit);
+}

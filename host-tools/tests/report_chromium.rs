@@ -182,3 +182,42 @@ fn bursty_record_report_has_non_empty_plots() {
         points.len()
     );
 }
+
+/// `tcomp calibrate` on the real MEMS cycle: one page, a section per channel, and in each section
+/// at least one plot that holds data; the page lays out in chromium with every plot non-empty.
+#[test]
+fn calibrate_report_has_a_non_empty_plot_per_channel() {
+    let spec = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../data/realdata/mems_thermal_cycle.calibrate.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cal");
+    let o = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+        .args(["calibrate", "--quiet", "--no-diagnosis", "--out"])
+        .arg(&out)
+        .arg(&spec)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let html = out.join("report.html");
+    let text = std::fs::read_to_string(&html).unwrap();
+    let sections: Vec<&str> = text.split("<h2 id=\"").skip(1).collect();
+    assert_eq!(sections.len(), 6, "one section per channel");
+    for s in &sections {
+        let name = s.split('"').next().unwrap_or("?");
+        let points = points_per_plot(s);
+        assert!(
+            points.iter().any(|&n| n > 0),
+            "channel {name}: no plot with data ({points:?})"
+        );
+    }
+    let all = points_per_plot(&text);
+    assert!(all.iter().all(|&n| n > 0), "an empty plot: {all:?}");
+    let Some(dom) = dump_dom(&html) else {
+        return;
+    };
+    assert_laid_out(&dom, all.len());
+    println!(
+        "chromium rendered {} plots of the calibration page",
+        all.len()
+    );
+}

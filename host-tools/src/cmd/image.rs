@@ -61,9 +61,14 @@ fn tool_version() -> String {
 }
 
 fn created(args: &Args) -> anyhow::Result<u64> {
-    if let Some(t) = args.created {
-        return Ok(t);
+    match args.created {
+        Some(t) => Ok(t),
+        None => created_now(),
     }
+}
+
+/// An image's creation time: `SOURCE_DATE_EPOCH` (so an image can be rebuilt bit for bit), else now.
+pub fn created_now() -> anyhow::Result<u64> {
     if let Ok(s) = std::env::var("SOURCE_DATE_EPOCH") {
         return s
             .trim()
@@ -78,8 +83,6 @@ fn created(args: &Args) -> anyhow::Result<u64> {
 /// One `--model` after its checks.
 struct Loaded {
     id: u16,
-    path: PathBuf,
-    bytes: Vec<u8>,
     data: String,
     data_hash: u64,
     window: [f32; 2],
@@ -99,7 +102,21 @@ fn provenance_of(trained_on: &str) -> (String, u64, [f32; 2]) {
     (t.file, hash, window)
 }
 
-fn load_model(spec: &str, board: &Board, done: &[Loaded]) -> anyhow::Result<Loaded> {
+/// One channel's blob for [`build`]: the board's channel id, the file it was read from (named in
+/// errors and in the provenance) and how errors name it (`--model 0=gx.tcm`, `channel gyro_x`).
+pub struct ChannelBlob {
+    /// Channel id in the board description.
+    pub id: u16,
+    /// Where the blob was read from, or will be written.
+    pub path: PathBuf,
+    /// How an error names this blob.
+    pub label: String,
+    /// The blob.
+    pub bytes: Vec<u8>,
+}
+
+/// Parses `ID=FILE` and reads the file.
+fn read_model_arg(spec: &str) -> anyhow::Result<ChannelBlob> {
     let (id, file) = spec
         .split_once('=')
         .with_context(|| format!("`--model {spec}`: expected ID=FILE"))?;
@@ -107,23 +124,33 @@ fn load_model(spec: &str, board: &Board, done: &[Loaded]) -> anyhow::Result<Load
         .trim()
         .parse()
         .with_context(|| format!("`--model {spec}`: channel id is not a number"))?;
+    let path = PathBuf::from(file.trim());
+    Ok(ChannelBlob {
+        id,
+        bytes: tcomp_train::blob_io::read(&path)?,
+        path,
+        label: format!("`--model {spec}`"),
+    })
+}
+
+/// Checks one blob against the board description's row for its channel.
+fn check_blob(blob: &ChannelBlob, board: &Board, done: &[Loaded]) -> anyhow::Result<Loaded> {
+    let (id, spec, path, bytes) = (blob.id, &blob.label, &blob.path, &blob.bytes);
     if done.iter().any(|l| l.id == id) {
-        bail!("`--model {spec}`: channel {id} is given twice");
+        bail!("{spec}: channel {id} is given twice");
     }
     let rows = board.channel_rows();
     let Some(row) = rows.iter().find(|r| r.id == id) else {
         let ids: Vec<String> = rows.iter().map(|r| r.id.to_string()).collect();
         bail!(
-            "`--model {spec}`: channel {id} is not in the board description {} (its channels: {})",
+            "{spec}: channel {id} is not in the board description {} (its channels: {})",
             board.path.display(),
             ids.join(", ")
         );
     };
-    let path = PathBuf::from(file.trim());
-    let bytes = tcomp_train::blob_io::read(&path)?;
-    tcomp_train::blob_io::check_flight(&path, &bytes)?;
-    let m = tcomp_train::blob_io::decode(&path, &bytes)?;
-    let on = format!("`--model {spec}`: channel {id} ({})", row.name);
+    tcomp_train::blob_io::check_flight(path, bytes)?;
+    let m = tcomp_train::blob_io::decode(path, bytes)?;
+    let on = format!("{spec}: channel {id} ({})", row.name);
     match row.accepts(&m.meta, m.program.inputs.iter().map(|s| &**s)) {
         Ok(()) => {}
         Err(Mismatch::Sensor(s)) => bail!(
@@ -156,32 +183,39 @@ fn load_model(spec: &str, board: &Board, done: &[Loaded]) -> anyhow::Result<Load
     Ok(Loaded {
         id,
         method,
-        path,
         data,
         data_hash,
         window,
-        bytes,
     })
 }
 
-/// Runs the command.
-pub fn run(args: &Args) -> anyhow::Result<()> {
-    if args.models.len() > MAX_ENTRIES {
+/// The image of one unit: `blobs` checked against `board` (an unknown or repeated channel, a model
+/// for another sensor kind, unit or axis, an input the channel's thermometers cannot supply, a blob
+/// the firmware would not load, an image larger than the `MODELS` region are all refused) and laid
+/// out by the core's `ImageSpec::write`. Shared by `tcomp image` and `tcomp calibrate`, so the two
+/// cannot check differently. A channel without a blob is simply absent from the table.
+pub fn build(
+    board: &Board,
+    serial: u64,
+    created: u64,
+    blobs: &[ChannelBlob],
+) -> anyhow::Result<Vec<u8>> {
+    if blobs.len() > MAX_ENTRIES {
         bail!("at most {MAX_ENTRIES} models fit the image table");
     }
-    let board = Board::load(&args.board)?;
     let mut loaded: Vec<Loaded> = Vec::new();
-    for spec in &args.models {
-        let l = load_model(spec, &board, &loaded)?;
+    for b in blobs {
+        let l = check_blob(b, board, &loaded)?;
         loaded.push(l);
     }
     let thermometers = board.thermometer_rows();
     let channels = board.channel_rows();
     let entries: Vec<Entry<'_>> = loaded
         .iter()
-        .map(|l| Entry {
+        .zip(blobs)
+        .map(|(l, b)| Entry {
             channel: l.id,
-            blob: &l.bytes,
+            blob: &b.bytes,
             provenance: Provenance {
                 data: &l.data,
                 data_hash: l.data_hash,
@@ -192,8 +226,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .collect();
     let tool = tool_version();
     let spec = ImageSpec {
-        serial: args.serial,
-        created: created(args)?,
+        serial,
+        created,
         tool: &tool,
         thermometers: &thermometers,
         channels: &channels,
@@ -205,7 +239,23 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let mut image = vec![0u8; len];
     spec.write(&mut image)?;
-    let mut inputs: Vec<(&str, &Path)> = loaded
+    Ok(image)
+}
+
+/// Runs the command.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    if args.models.len() > MAX_ENTRIES {
+        bail!("at most {MAX_ENTRIES} models fit the image table");
+    }
+    let board = Board::load(&args.board)?;
+    // Read and check one `--model` at a time, so the first bad argument is the one named.
+    let mut blobs = Vec::new();
+    for spec in &args.models {
+        blobs.push(read_model_arg(spec)?);
+        build(&board, args.serial, 0, &blobs)?;
+    }
+    let image = build(&board, args.serial, created(args)?, &blobs)?;
+    let mut inputs: Vec<(&str, &Path)> = blobs
         .iter()
         .map(|l| ("--model", l.path.as_path()))
         .collect();
@@ -217,7 +267,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         "wrote {} ({} bytes, {} models for board {} (hash {:016x}), unit {}): flash it at 0x003F0000",
         args.out.display(),
         image.len(),
-        loaded.len(),
+        blobs.len(),
         super::printable::text(&board.name),
         board.hash(),
         args.serial

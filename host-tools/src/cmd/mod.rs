@@ -17,6 +17,7 @@ macro_rules! out {
     };
 }
 
+pub mod calibrate;
 mod check;
 pub mod compare;
 pub mod demo;
@@ -29,10 +30,11 @@ pub mod image;
 pub mod inspect;
 mod inspect_image;
 pub mod json;
-mod output;
-mod printable;
-mod progress;
+pub mod output;
+pub mod printable;
+pub mod progress;
 pub mod report;
 mod run;
 pub mod simulate;
+mod simulate_units;
 pub mod stdout;

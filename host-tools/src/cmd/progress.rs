@@ -22,6 +22,23 @@ pub fn spinner(quiet: bool, msg: &str) -> ProgressBar {
     pb
 }
 
+/// A bar over `total` items of work (channels, units) done in any order, e.g. from rayon's
+/// threads (`inc` is thread-safe), or a hidden one with `quiet`.
+pub fn counter(quiet: bool, what: &str, total: u64, unit: &str) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(total);
+    let template =
+        format!("{{msg}} [{{bar:30}}] {{pos}}/{{len}} {unit} [{{elapsed}} elapsed, eta {{eta}}]");
+    if let Ok(style) = ProgressStyle::with_template(&template) {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    pb.set_message(what.to_string());
+    pb.enable_steady_tick(Duration::from_millis(250));
+    pb
+}
+
 /// A progress bar driven by the libraries' progress callbacks: one task at a time, each with its
 /// own length, unit and message.
 pub struct Bar {

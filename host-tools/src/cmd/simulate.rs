@@ -41,6 +41,13 @@ pub struct Args {
     /// Output step in seconds (a multiple of 1/rate); default 1 s, or the scenario's.
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub step_s: Option<f64>,
+    /// Simulate a production line of this many units instead, each in `OUT/unit-NNNN/` with its
+    /// own seeds and a spread of its polynomial bias (for `tcomp calibrate --units OUT`).
+    #[arg(long, value_name = "N")]
+    pub units: Option<usize>,
+    /// With --units: plant this many outlier units (listed in OUT/fleet-truth.json).
+    #[arg(long, value_name = "K", default_value_t = 0, requires = "units")]
+    pub outliers: usize,
     /// Gzip the CSV files (`train.csv.gz`, `verify.csv.gz`).
     #[arg(long)]
     pub gzip: bool,
@@ -80,6 +87,17 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     // Checked here, before anything is written, with the options named as typed.
     for sc in [&preset.train, &preset.verify] {
         sc.validate().map_err(|e| as_flags(e, args))?;
+    }
+    if let Some(n) = args.units {
+        let planted =
+            super::simulate_units::run(&preset, n, args.outliers, args.seed.unwrap_or(1), out)?;
+        if !args.quiet {
+            outln!("wrote {n} units into {}", out.display());
+            for p in &planted {
+                outln!("  outlier {}: {}", p.unit, p.kind);
+            }
+        }
+        return Ok(());
     }
     let mut progress = super::progress::Bar::new(args.quiet);
     let truth = tcomp_sim::write_preset_with_progress(&preset, out, args.gzip, &mut progress)?;

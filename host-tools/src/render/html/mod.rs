@@ -16,7 +16,9 @@
 //! reads back.
 
 mod bars;
+pub mod calibrate;
 mod figures;
+pub mod fleet;
 mod plot;
 mod tables;
 
@@ -102,23 +104,37 @@ impl View<'_> {
 }
 
 /// Renders the report: the page, its tables, and the plots of [`figures`].
-#[allow(
-    dead_code,
-    reason = "the entry point of callers without a view (calibrate)"
-)]
+#[allow(dead_code, reason = "the entry point of callers without a view")]
 pub fn render(input: &ReportInput<'_>) -> String {
     render_with(input, &View::default())
 }
 
 /// [`render`] with what `view` says about the run shown (its channel, units and data).
 pub fn render_with(input: &ReportInput<'_>, view: &View<'_>) -> String {
-    let unit = view.unit(input);
-    let subject = view.subject(input);
     let mut h = String::new();
+    head(&mut h, &input.title);
+    let _ = writeln!(h, "<h1>{}</h1>", esc(&input.title));
+    body(&mut h, input, view);
+    tail(&mut h);
+    h
+}
+
+/// The page's head (title, style) and the opening of its body.
+fn head(h: &mut String, title: &str) {
     let _ = write!(
         h,
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\n<style>body{{font-family:sans-serif;max-width:900px;margin:1em auto;color:#222}}.scroll{{overflow-x:auto;margin:8px 0 18px}}table{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}}td:first-child,th:first-child{{text-align:left}}.verdict{{font-size:16px;padding:8px;background:#f4f4e8;border-left:4px solid #c90}}.row{{display:flex;gap:0}}svg{{display:block;margin:10px 0}}</style></head>\n<body>\n<h1>{t}</h1>\n<p>Channel: <b>{c}</b>{u}. Data: {d}{r}</p>\n",
-        t = esc(&input.title),
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\n<style>body{{font-family:sans-serif;max-width:900px;margin:1em auto;color:#222}}.scroll{{overflow-x:auto;margin:8px 0 18px}}table{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}}td:first-child,th:first-child{{text-align:left}}.verdict{{font-size:16px;padding:8px;background:#f4f4e8;border-left:4px solid #c90}}.flag{{font-size:15px;padding:8px;background:#fbe9e7;border-left:4px solid #c62828;color:#b71c1c;font-weight:bold}}.row{{display:flex;gap:0}}svg{{display:block;margin:10px 0}}</style></head>\n<body>\n",
+        t = esc(title),
+    );
+}
+
+/// One run's section: the channel line, the verdict, the figures, the plots and the segments.
+fn body(h: &mut String, input: &ReportInput<'_>, view: &View<'_>) {
+    let unit = view.unit(input);
+    let subject = view.subject(input);
+    let _ = writeln!(
+        h,
+        "<p>Channel: <b>{c}</b>{u}. Data: {d}{r}</p>",
         c = esc(&subject),
         u = if unit.is_empty() {
             String::new()
@@ -138,9 +154,9 @@ pub fn render_with(input: &ReportInput<'_>, view: &View<'_>) -> String {
         .map(|m| segments::table(&m.run))
         .unwrap_or_default();
     if let Some(a) = input.analysis {
-        tables::verdict(&mut h, a, &unit, input.noise_floor);
+        tables::verdict(h, a, &unit, input.noise_floor);
     }
-    tables::figures(&mut h, input, &unit);
+    tables::figures(h, input, &unit);
     h.push_str("<h2>Plots</h2>\n");
     if let Some(s) = figures::time_plot_in(input, view) {
         h.push_str(&s);
@@ -158,7 +174,10 @@ pub fn render_with(input: &ReportInput<'_>, view: &View<'_>) -> String {
     if let Some(s) = figures::segment_bars_in(input, &segs, view) {
         h.push_str(&s);
     }
-    tables::segments(&mut h, input, &segs, &unit, &view.temperature_unit());
+    tables::segments(h, input, &segs, &unit, &view.temperature_unit());
+}
+
+/// The inline check of the plots (see the module doc) and the end of the page.
+fn tail(h: &mut String) {
     h.push_str("<script>(function(){var s=document.querySelectorAll('svg.plot'),ok=0;for(var i=0;i<s.length;i++){var b=s[i].getBBox();if(b.width>0&&b.height>0&&Number(s[i].getAttribute('data-points'))>0)ok++;}document.body.setAttribute('data-plots',String(s.length));document.body.setAttribute('data-plots-ok',String(ok));})();</script>\n</body></html>\n");
-    h
 }
