@@ -49,14 +49,58 @@ pub struct Rows<R: Read> {
     prev_t: f64,
 }
 
-/// A finite float from a field's bytes (the reader trims spaces), or [`Stop`].
+/// A finite float from a field's bytes, spaces around it ignored (as the in-memory reader trims
+/// them), or [`Stop`].
 #[inline]
 fn num(field: Option<&[u8]>) -> Result<f64, Stop> {
-    let v: f64 = field
-        .and_then(|f| std::str::from_utf8(f).ok())
-        .and_then(|s| s.parse().ok())
-        .ok_or(Stop)?;
+    let f = field.ok_or(Stop)?.trim_ascii();
+    let v = match decimal(f) {
+        Some(v) => v,
+        None => std::str::from_utf8(f)
+            .ok()
+            .and_then(|s| s.parse::<f64>().ok())
+            .ok_or(Stop)?,
+    };
     if v.is_finite() { Ok(v) } else { Err(Stop) }
+}
+
+/// Exact powers of ten (every one up to 10²² is a double).
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// A plain decimal `[±]digits[.digits]` whose digits make an integer `m ≤ 2⁵³` with at most 22
+/// after the point, as `m / 10^k`: both exact doubles, so the one division is correctly rounded
+/// and gives the bits `str::parse` gives (Clinger's fast path). `None` for anything else
+/// (exponents, long mantissas, text), which `str::parse` then reads.
+#[inline]
+pub(super) fn decimal(b: &[u8]) -> Option<f64> {
+    let (neg, digits) = match b.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, b),
+    };
+    let (mut m, mut n, mut frac, mut dot) = (0u64, 0u32, 0usize, false);
+    for &c in digits {
+        match c {
+            b'0'..=b'9' => {
+                if n >= 19 {
+                    return None;
+                }
+                m = m * 10 + u64::from(c - b'0');
+                n += 1;
+                frac += usize::from(dot);
+            }
+            b'.' if !dot => dot = true,
+            _ => return None,
+        }
+    }
+    if n == 0 || m > 1 << 53 {
+        return None;
+    }
+    let v = m as f64 / *POW10.get(frac)?;
+    Some(if neg { -v } else { v })
 }
 
 impl<R: Read> Rows<R> {
@@ -68,7 +112,9 @@ impl<R: Read> Rows<R> {
     ) -> Result<Self, Stop> {
         let mut rdr = csv::ReaderBuilder::new()
             .has_headers(true)
-            .trim(csv::Trim::All)
+            // Headers trimmed as the in-memory reader trims them; fields by `num`, in place
+            // (the reader's own field trimming builds a new record per row).
+            .trim(csv::Trim::Headers)
             .flexible(true)
             .buffer_capacity(1 << 16)
             .from_reader(reader);
@@ -159,5 +205,68 @@ impl<R: Read> Rows<R> {
                 temperature,
             }));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::decimal;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(20_000))]
+        #[test]
+        fn decimals_parse_as_std_does(int in 0u64..100_000_000, frac in 0u64..1_000_000_000, places in 0usize..12, neg: bool) {
+            let text = if places == 0 {
+                format!("{}{int}", if neg { "-" } else { "" })
+            } else {
+                let f = format!("{frac:09}");
+                format!("{}{int}.{}", if neg { "-" } else { "" }, &f[..places.min(9)])
+            };
+            let fast = decimal(text.as_bytes());
+            let std: f64 = text.parse().unwrap();
+            // Up to 15 digits the fast path always applies; past 2⁵³ it leaves the text to std.
+            let digits = text.bytes().filter(u8::is_ascii_digit).count();
+            if digits <= 15 {
+                prop_assert!(fast.is_some(), "{}", text);
+            }
+            if let Some(v) = fast {
+                prop_assert_eq!(v.to_bits(), std.to_bits(), "{}", text);
+            }
+        }
+
+        #[test]
+        fn anything_else_is_left_to_std(text in "[-+0-9.eE]{0,30}") {
+            if let Some(v) = decimal(text.as_bytes()) {
+                prop_assert_eq!(Some(v.to_bits()), text.parse::<f64>().ok().map(f64::to_bits), "{}", text);
+            }
+        }
+    }
+
+    #[test]
+    fn edge_cases() {
+        for t in [
+            "0",
+            "-0",
+            "-0.0000",
+            "5.",
+            ".5",
+            "9007199254740992",
+            "0.1",
+            "21600.0050",
+            "1e3",
+            "",
+            ".",
+            "-",
+            "1.2.3",
+            "12345678901234567890",
+        ] {
+            if let Some(v) = decimal(t.as_bytes()) {
+                assert_eq!(v.to_bits(), t.parse::<f64>().unwrap().to_bits(), "{t}");
+            }
+        }
+        assert!(decimal(b"1e3").is_none() && decimal(b"").is_none() && decimal(b".").is_none());
+        assert!(decimal(b"12345678901234567890").is_none());
     }
 }

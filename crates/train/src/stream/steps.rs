@@ -12,6 +12,27 @@
 //! again with the true limit (the caller's job).
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A hasher for the bits of a step: one multiply (the keys are not chosen by an adversary).
+#[derive(Default)]
+struct Mix(u64);
+
+impl Hasher for Mix {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (v ^ (v >> 29)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    }
+}
+
+type Counts = HashMap<u64, Entry, BuildHasherDefault<Mix>>;
 
 /// Distinct step values counted before the record is declared unfit for streaming.
 pub const MAX_DISTINCT: usize = 1 << 16;
@@ -33,7 +54,7 @@ pub struct Steps {
     /// A limit known in advance (a second reading), or `None`: provisional from the early steps.
     fixed: Option<f64>,
     early: Vec<f64>,
-    counts: HashMap<u64, Entry>,
+    counts: Counts,
     /// The last value seen and its not-yet-counted entry (a uniform record hashes nothing).
     last: Option<(u64, Entry)>,
     total: u64,
@@ -47,7 +68,7 @@ impl Steps {
             gap_s,
             fixed: limit,
             early: Vec::new(),
-            counts: HashMap::new(),
+            counts: Counts::default(),
             last: None,
             total: 0,
         }
