@@ -64,24 +64,6 @@ impl RunArgs {
         roles
     }
 
-    /// The options of a streamed evaluation of `--data` ([`tcomp_train::eval_stream`]) with
-    /// these roles, bins of `bin_s` seconds and the segment temperature column.
-    pub fn stream(
-        &self,
-        roles: Roles,
-        bin_s: f64,
-        temperature: Option<String>,
-    ) -> tcomp_train::StreamOptions {
-        tcomp_train::StreamOptions {
-            roles,
-            bin_s,
-            temperature,
-            gap_s: self.run.gap,
-            from: self.run.from,
-            until: self.run.until,
-        }
-    }
-
     /// Loads `--data` and keeps the rows of the window (time column `time`); at least two rows
     /// must remain, since one row has no spread and every figure would be a meaningless zero.
     pub fn load(&self, time: &str) -> anyhow::Result<Dataset> {
@@ -108,5 +90,23 @@ impl RunArgs {
             );
         }
         Ok(data)
+    }
+
+    /// The options of a streamed evaluation of `--data` ([`tcomp_train::eval_stream`]) with
+    /// these roles, bins of `bin_s` seconds and the segment temperature column.
+    pub fn stream(
+        &self,
+        roles: Roles,
+        bin_s: f64,
+        temperature: Option<String>,
+    ) -> tcomp_train::StreamOptions {
+        tcomp_train::StreamOptions {
+            roles,
+            bin_s,
+            temperature,
+            gap_s: self.run.gap,
+            from: self.run.from,
+            until: self.run.until,
+        }
     }
 }
