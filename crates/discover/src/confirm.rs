@@ -160,19 +160,12 @@ impl<'a> Refits<'a> {
         };
         let features = &self.info.spec.features;
         let evidence = |p: f64| {
-            crate::surrogate::log_evidence(
-                prepared,
-                &search.template.member(p).applied_to(features),
-            )
+            crate::surrogate::log_evidence(prepared, &search.template.member(p).applied_to(features))
         };
         let heldout = |p: f64| {
-            heldout_std(
-                self,
-                blocks,
-                &search.template.member(p).applied_to(features),
-            )
-            .ok()
-            .map(|r| r.0)
+            heldout_std(self, blocks, &search.template.member(p).applied_to(features))
+                .ok()
+                .map(|r| r.0)
         };
         let Some(est) = crate::param::estimate(&search, &evidence, &heldout) else {
             return;
@@ -330,10 +323,7 @@ pub fn confirm(
             .total_cmp(&cands[a].delta_log_evidence)
     });
     order.truncate(opts.top);
-    let mut leading: Vec<Scored> = order
-        .iter()
-        .filter_map(|&i| cands.get(i).cloned())
-        .collect();
+    let mut leading: Vec<Scored> = order.iter().filter_map(|&i| cands.get(i).cloned()).collect();
     leading
         .par_iter_mut()
         .for_each(|c| refits.estimate(c, prepared, &blocks));
@@ -356,7 +346,8 @@ pub fn confirm(
     let ((before, before_each), base_evidence) = results
         .next()
         .unwrap_or(Ok(((f64::NAN, Vec::new()), f64::NAN)))?;
-    let mut outcome: Vec<(usize, std::result::Result<Refitted, String>)> = Vec::new();
+    let mut outcome: Vec<(usize, std::result::Result<Refitted, String>)> =
+        Vec::new();
     for (&i, r) in order.iter().zip(results) {
         outcome.push((i, r.map_err(|e| e.to_string())));
     }

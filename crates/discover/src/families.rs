@@ -166,10 +166,7 @@ impl Template {
             }
             Template::GradientLag { a, b } => added(
                 kind_named("gradient_lag", EffectKind::Gradient),
-                format!(
-                    "thermal gradient {a}−{b} reaching the element late, {}",
-                    minutes(p)
-                ),
+                format!("thermal gradient {a}−{b} reaching the element late, {}", minutes(p)),
                 expr::lag(expr::name(a) - expr::name(b), p),
             ),
             Template::Rate { of, existing } => {
@@ -238,10 +235,7 @@ pub fn existing_rate(x: &str, features: &[String]) -> Option<(String, f64)> {
     features.iter().find_map(|f| {
         let n = norm(f);
         if n == plain {
-            return Some((
-                f.clone(),
-                f64::from(tcomp_core::lang::DEFAULT_RATE_WINDOW_S),
-            ));
+            return Some((f.clone(), f64::from(tcomp_core::lang::DEFAULT_RATE_WINDOW_S)));
         }
         let w: f64 = n.strip_prefix(&open)?.strip_suffix(')')?.parse().ok()?;
         Some((f.clone(), w))

@@ -142,10 +142,7 @@ pub fn estimate(
         let v = evidence(u.exp());
         if v.is_finite() { v } else { f64::NEG_INFINITY }
     };
-    let mut seen: Vec<(f64, f64)> = (0..GRID)
-        .into_par_iter()
-        .map(|k| (at(k), f(at(k))))
-        .collect();
+    let mut seen: Vec<(f64, f64)> = (0..GRID).into_par_iter().map(|k| (at(k), f(at(k)))).collect();
     let value = |k: usize| seen.get(k).map_or(f64::NEG_INFINITY, |s| s.1);
     let best_grid = (0..GRID).max_by(|&a, &b| value(a).total_cmp(&value(b)))?;
     if !value(best_grid).is_finite() {
@@ -261,26 +258,14 @@ mod tests {
         assert!(e.bounded);
         // ±√(2/40) in ln τ.
         let w = (2.0f64 / 40.0).sqrt();
-        assert!(
-            (e.interval[0] / (1834.0 * (-w).exp()) - 1.0).abs() < 0.05,
-            "{e:?}"
-        );
-        assert!(
-            (e.interval[1] / (1834.0 * w.exp()) - 1.0).abs() < 0.05,
-            "{e:?}"
-        );
+        assert!((e.interval[0] / (1834.0 * (-w).exp()) - 1.0).abs() < 0.05, "{e:?}");
+        assert!((e.interval[1] / (1834.0 * w.exp()) - 1.0).abs() < 0.05, "{e:?}");
     }
 
     #[test]
     fn a_flat_profile_is_decided_by_cross_validation_and_says_so() {
         // Flat within a nat from 500 to 5000 s; the held-out residual is lowest at 2000 s.
-        let ev = |p: f64| {
-            if (500.0..5000.0).contains(&p) {
-                0.0
-            } else {
-                -10.0
-            }
-        };
+        let ev = |p: f64| if (500.0..5000.0).contains(&p) { 0.0 } else { -10.0 };
         let cv = |p: f64| Some((p / 2000.0).ln().abs() + 1.0);
         let e = estimate(&lag_search(), &ev, &cv).unwrap_or_else(|| unreachable!());
         assert_eq!(e.chosen_by, ChosenBy::CrossValidation);

@@ -81,14 +81,7 @@ fn case_preset(preset: tcomp_sim::Preset, hidden: Option<EffectKind>) -> Outcome
     if std::env::var("SHOW_PROFILE").is_ok() {
         for c in d.candidates.iter().take(4) {
             if let Some(e) = &c.estimate {
-                text += &format!(
-                    "  {} profile: {:?}\n",
-                    c.effect,
-                    e.profile
-                        .iter()
-                        .map(|p| format!("{:.0}:{:.1}", p[0], p[1]))
-                        .collect::<Vec<_>>()
-                );
+                text += &format!("  {} profile: {:?}\n", c.effect, e.profile.iter().map(|p| format!("{:.0}:{:.1}", p[0], p[1])).collect::<Vec<_>>());
             }
         }
     }

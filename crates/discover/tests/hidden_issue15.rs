@@ -37,12 +37,7 @@ struct Case {
 
 /// The values of `exprs` over `data`, one column each (the core's program, state carried across
 /// gaps up to `gap_s`).
-fn columns(
-    data: &Dataset,
-    signals: &[String],
-    exprs: &[String],
-    gap: Option<f64>,
-) -> Vec<Vec<f64>> {
+fn columns(data: &Dataset, signals: &[String], exprs: &[String], gap: Option<f64>) -> Vec<Vec<f64>> {
     let spec = FeatureSpec {
         signals: signals.to_vec(),
         features: exprs.to_vec(),
@@ -82,12 +77,7 @@ fn inject(
 /// A coefficient that gives `expr` a contribution of `multiple` × the noise floor (std over the
 /// training run).
 fn scaled(case: &Case, expr: &str, multiple: f64) -> f64 {
-    let c = columns(
-        &case.sim.train,
-        &case.signals,
-        &[expr.to_string()],
-        case.gap_s,
-    );
+    let c = columns(&case.sim.train, &case.signals, &[expr.to_string()], case.gap_s);
     let n = c[0].len() as f64;
     let m = c[0].iter().sum::<f64>() / n;
     let sd = (c[0].iter().map(|v| (v - m) * (v - m)).sum::<f64>() / n).sqrt();
@@ -158,24 +148,15 @@ fn limit_ratio(case: &Case) -> f64 {
     let design = |data: &Dataset| {
         let cols = columns(data, &case.signals, &case.truth, case.gap_s);
         let n = cols[0].len();
-        DMatrix::from_fn(
-            n,
-            cols.len() + 1,
-            |i, j| if j == 0 { 1.0 } else { cols[j - 1][i] },
-        )
+        DMatrix::from_fn(n, cols.len() + 1, |i, j| if j == 0 { 1.0 } else { cols[j - 1][i] })
     };
     let err = |data: &Dataset| {
         let t = data.column(&case.sim.train_truth.columns.target).unwrap();
-        let r = data
-            .column(&case.sim.train_truth.columns.reference)
-            .unwrap();
+        let r = data.column(&case.sim.train_truth.columns.reference).unwrap();
         DVector::from_iterator(t.len(), t.iter().zip(r).map(|(a, b)| a - b))
     };
     let (x, y) = (design(&case.sim.train), err(&case.sim.train));
-    let w = (x.transpose() * &x)
-        .lu()
-        .solve(&(x.transpose() * y))
-        .unwrap();
+    let w = (x.transpose() * &x).lu().solve(&(x.transpose() * y)).unwrap();
     let (xv, yv) = (design(&case.sim.verify), err(&case.sim.verify));
     let res: Vec<f64> = (yv - xv * w).iter().copied().collect();
     let time = case.sim.verify.time("time_s").unwrap();
@@ -219,11 +200,7 @@ fn describe(case: &Case, d: &Diagnosis) -> String {
     if std::env::var("SHOW_PROFILE").is_ok() {
         for c in d.candidates.iter().take(4) {
             if let Some(e) = &c.estimate {
-                let p: Vec<String> = e
-                    .profile
-                    .iter()
-                    .map(|p| format!("{:.0}:{:.1}", p[0], p[1]))
-                    .collect();
+                let p: Vec<String> = e.profile.iter().map(|p| format!("{:.0}:{:.1}", p[0], p[1])).collect();
                 text += &format!("  {} profile: {p:?}\n", c.effect);
             }
         }
@@ -238,9 +215,7 @@ fn describe(case: &Case, d: &Diagnosis) -> String {
                 .map_or(f64::NAN, |k| k.delta_log_evidence_refit),
             c.residual_std_after,
             c.improvement_pct,
-            c.estimate
-                .as_ref()
-                .map(|e| (e.value, e.interval, e.chosen_by)),
+            c.estimate.as_ref().map(|e| (e.value, e.interval, e.chosen_by)),
             c.fails.join("; ")
         );
     }
@@ -251,13 +226,7 @@ fn run(case: &Case) -> Outcome {
     let fitted = fit(case, &case.base);
     let bytes = fitted.model.to_bytes().unwrap();
     let model = tcomp_train::blob_io::decode("m.tcm".as_ref(), &bytes).unwrap();
-    let a = diagnose(
-        &model,
-        &case.sim.train,
-        Some(&case.sim.verify),
-        &options(case),
-    )
-    .unwrap();
+    let a = diagnose(&model, &case.sim.train, Some(&case.sim.verify), &options(case)).unwrap();
     let text = describe(case, &a.diagnosis);
     Outcome {
         diagnosis: a.diagnosis,
@@ -291,11 +260,7 @@ fn check_parameter(o: &Outcome, truth: f64, tol: f64) {
         .as_ref()
         .unwrap_or_else(|| panic!("no estimate\n{}", o.text));
     assert!((e.value / truth - 1.0).abs() <= tol, "{}", o.text);
-    assert!(
-        e.interval[0] <= e.value && e.value <= e.interval[1],
-        "{}",
-        o.text
-    );
+    assert!(e.interval[0] <= e.value && e.value <= e.interval[1], "{}", o.text);
 }
 
 fn base_case(preset: tcomp_sim::Preset, hidden: &[EffectKind]) -> Case {
@@ -329,9 +294,7 @@ fn base_case(preset: tcomp_sim::Preset, hidden: &[EffectKind]) -> Case {
 fn lag_in_every_term() {
     let tau = 1800.0;
     let case = base_case(
-        presets::with_effects(SensorKind::Qma, &[])
-            .unwrap()
-            .with_seed(21),
+        presets::with_effects(SensorKind::Qma, &[]).unwrap().with_seed(21),
         &[],
     );
     let l = || expr::lag(expr::name("t_qma_c"), tau);
@@ -417,11 +380,7 @@ fn dropouts(data: &Dataset, windows: &[(f64, f64)]) -> Dataset {
 fn gappy_2hz_log_with_a_lag() {
     let preset = presets::with_effects(
         SensorKind::Qma,
-        &[
-            EffectKind::Poly,
-            EffectKind::Rate,
-            EffectKind::LaggedElement,
-        ],
+        &[EffectKind::Poly, EffectKind::Rate, EffectKind::LaggedElement],
     )
     .unwrap()
     .with_seed(24)
@@ -481,10 +440,7 @@ fn two_effects_in_two_rounds() {
     );
     let after = after_ratio(&case, &r.final_features);
     let limit = limit_ratio(&case);
-    println!(
-        "{text}after {:?}: {after:.2}× (limit {limit:.2}×)",
-        r.final_features
-    );
+    println!("{text}after {:?}: {after:.2}× (limit {limit:.2}×)", r.final_features);
     assert!(after <= AFTER_TARGET, "{text}after {after:.2}×");
 }
 
@@ -509,20 +465,9 @@ fn distractors_correlated_with_temperature_give_none() {
         // A small deterministic wobble so that neither column is an exact function of t_coil_c.
         let wobble = |i: usize| ((i as f64 * 0.37 + seed as f64).sin()) * 0.02;
         names.push("t_board_c".into());
-        cols.push(
-            board[0]
-                .iter()
-                .enumerate()
-                .map(|(i, v)| 0.9 * v + 3.0 + wobble(i))
-                .collect(),
-        );
+        cols.push(board[0].iter().enumerate().map(|(i, v)| 0.9 * v + 3.0 + wobble(i)).collect());
         names.push("fan_duty".into());
-        cols.push(
-            coil.iter()
-                .enumerate()
-                .map(|(i, v)| 0.02 * v + 0.1 + wobble(i + 7))
-                .collect(),
-        );
+        cols.push(coil.iter().enumerate().map(|(i, v)| 0.02 * v + 0.1 + wobble(i + 7)).collect());
         Dataset::from_columns(data.file(), names, cols)
     };
     case.sim.train = add(&case.sim.train, 1);
@@ -537,9 +482,7 @@ fn distractors_correlated_with_temperature_give_none() {
 fn scratch_profile() {
     let tau = 1800.0;
     let case = base_case(
-        presets::with_effects(SensorKind::Qma, &[])
-            .unwrap()
-            .with_seed(21),
+        presets::with_effects(SensorKind::Qma, &[]).unwrap().with_seed(21),
         &[],
     );
     let l = || expr::lag(expr::name("t_qma_c"), tau);
@@ -551,24 +494,10 @@ fn scratch_profile() {
         (60.0, expr::rate(l()).to_string()),
     ];
     let case = with_injected(case, &terms);
-    for t in [
-        1200.0, 1500.0, 1700.0, 1800.0, 1900.0, 2100.0, 2400.0, 2900.0,
-    ] {
-        let f = vec![
-            format!("lag(t_qma_c, {t})"),
-            format!("rate(lag(t_qma_c, {t}))"),
-        ];
+    for t in [1200.0, 1500.0, 1700.0, 1800.0, 1900.0, 2100.0, 2400.0, 2900.0] {
+        let f = vec![format!("lag(t_qma_c, {t})"), format!("rate(lag(t_qma_c, {t}))")];
         let fitted = fit(&case, &f);
-        let ev = fitted
-            .summary
-            .details
-            .evidence
-            .clone()
-            .map(|e| e.log_evidence);
-        println!(
-            "tau {t}: evidence {ev:?} basis {:?} after {:.2}",
-            fitted.summary.details,
-            after_ratio(&case, &f)
-        );
+        let ev = fitted.summary.details.evidence.clone().map(|e| e.log_evidence);
+        println!("tau {t}: evidence {ev:?} basis {:?} after {:.2}", fitted.summary.details, after_ratio(&case, &f));
     }
 }
