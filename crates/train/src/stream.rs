@@ -3,7 +3,8 @@
 //! [`crate::metrics::report`] uses.
 //!
 //! Why: a 6-hour 200 Hz log is 4.3 M rows; loading it as columns costs hundreds of MB for figures
-//! that need a few running sums. Memory here is O(distinct time steps + bins), whatever the length:
+//! that need a few running sums. Memory here is O(bins), whatever the length (plus at most
+//! [`steps::MAX_DISTINCT`] counted time steps):
 //! one reused `ByteRecord`, floats parsed from its bytes without allocating, only the columns the
 //! model uses parsed at all.
 //!
@@ -13,7 +14,8 @@
 //! backwards, an unknown column, a broken gzip stream, a `--bin` too long — is produced by the
 //! in-memory path: the first problem stops the stream and the file is read again by [`Dataset`],
 //! which names the file, line and column exactly as `eval` always has. A record with more distinct
-//! time steps than [`steps::MAX_DISTINCT`] (a jittery clock) is evaluated the same way in memory.
+//! time steps than [`steps::MAX_DISTINCT`] (a jittery clock) has its median found by reading its
+//! time column four more times ([`steps::radix_median`]), then is evaluated with it.
 
 use crate::dataset::Dataset;
 use crate::error::TrainError;
@@ -82,24 +84,59 @@ pub fn eval_stream_reader<R: Read + Seek>(
     in_memory(file, reader, gz, model, opts)
 }
 
-/// The streaming reading alone (twice when an early gap was misjudged): `None` when the record
-/// needs the in-memory path, for its error or for too many distinct time steps.
+/// The streaming reading alone: `None` when the record needs the in-memory path for its error.
+/// A record read with a misjudged early gap is read again with the true median step; one with
+/// too many distinct steps to count has its median found first by [`steps::radix_median`]'s
+/// readings of the time column.
 pub fn streamed_only<R: Read + Seek>(
     mut reader: R,
     gz: bool,
     model: &HostModel<'_>,
     opts: &StreamOptions,
 ) -> Option<EvalReport> {
-    let mut limit = None;
-    for _ in 0..2 {
+    let mut median = None;
+    for _ in 0..3 {
         reader.seek(SeekFrom::Start(0)).ok()?;
-        match streamed(&mut reader, gz, model, opts, limit) {
+        match streamed(&mut reader, gz, model, opts, median) {
             Ok(Outcome::Report(r)) => return Some(r),
-            Ok(Outcome::Again(l)) => limit = Some(l),
+            Ok(Outcome::Again(m)) => median = Some(m),
+            Ok(Outcome::TooManySteps) => {
+                let m = steps::radix_median(|f: &mut dyn FnMut(f64)| {
+                    reader.seek(SeekFrom::Start(0)).ok()?;
+                    each_step(&mut reader, gz, model, opts, f).ok()
+                })?;
+                median = Some(m);
+            }
             Err(pass::Stop) => return None,
         }
     }
     None
+}
+
+/// Feeds every time step of the window to `f` (the time column alone is parsed).
+fn each_step<R: Read>(
+    reader: R,
+    gz: bool,
+    model: &HostModel<'_>,
+    opts: &StreamOptions,
+    f: &mut dyn FnMut(f64),
+) -> Result<(), pass::Stop> {
+    fn steps<R: Read>(mut rows: pass::Rows<R>, f: &mut dyn FnMut(f64)) -> Result<(), pass::Stop> {
+        let mut prev = None;
+        while let Some(t) = rows.next_time()? {
+            if let Some(p) = prev {
+                f(t - p);
+            }
+            prev = Some(t);
+        }
+        Ok(())
+    }
+    if gz {
+        let r = MultiGzDecoder::new(std::io::BufReader::with_capacity(1 << 16, reader));
+        steps(pass::Rows::open(r, model, opts)?, f)
+    } else {
+        steps(pass::Rows::open(reader, model, opts)?, f)
+    }
 }
 
 fn io_error(file: &str, source: std::io::Error) -> TrainError {
@@ -114,8 +151,10 @@ fn io_error(file: &str, source: std::io::Error) -> TrainError {
 enum Outcome {
     /// The report.
     Report(EvalReport),
-    /// A gap was misjudged before the median was known: read again with this limit.
+    /// A gap was misjudged before the median was known: read again with this median step.
     Again(f64),
+    /// More distinct time steps than [`steps::MAX_DISTINCT`]: find the median, then read again.
+    TooManySteps,
 }
 
 /// One streamed reading, in the model's flight capacity when it fits (as [`crate::metrics::run_model`]).
@@ -124,7 +163,7 @@ fn streamed<R: Read>(
     gz: bool,
     model: &HostModel<'_>,
     opts: &StreamOptions,
-    limit: Option<f64>,
+    median: Option<f64>,
 ) -> Result<Outcome, pass::Stop> {
     if usize::from(model.rbf.n_features) <= features::FLIGHT_FEATURES {
         let mut buf = vec![0u8; crate::blob_io::MAX_BLOB];
@@ -136,10 +175,10 @@ fn streamed<R: Read>(
                 Model::<'_, C, { features::FLIGHT_FEATURES }, { features::N }>::decode(b).ok()
             });
         if let Some(m) = narrow {
-            return read(reader, gz, &m, opts, limit);
+            return read(reader, gz, &m, opts, median);
         }
     }
-    read(reader, gz, model, opts, limit)
+    read(reader, gz, model, opts, median)
 }
 
 fn read<R: Read, const C2: usize, const F2: usize, const N2: usize>(
@@ -147,13 +186,13 @@ fn read<R: Read, const C2: usize, const F2: usize, const N2: usize>(
     gz: bool,
     model: &Model<'_, C2, F2, N2>,
     opts: &StreamOptions,
-    limit: Option<f64>,
+    median: Option<f64>,
 ) -> Result<Outcome, pass::Stop> {
     if gz {
         let r = MultiGzDecoder::new(std::io::BufReader::with_capacity(1 << 16, reader));
-        run(r, model, opts, limit)
+        run(r, model, opts, median)
     } else {
-        run(reader, model, opts, limit)
+        run(reader, model, opts, median)
     }
 }
 
@@ -162,13 +201,13 @@ fn run<R: Read, const C2: usize, const F2: usize, const N2: usize>(
     reader: R,
     model: &Model<'_, C2, F2, N2>,
     opts: &StreamOptions,
-    limit: Option<f64>,
+    median: Option<f64>,
 ) -> Result<Outcome, pass::Stop> {
     if let Some(g) = opts.gap_s {
         crate::options::GAP.check(g).map_err(|_| pass::Stop)?;
     }
     let mut rows = pass::Rows::open(reader, model, opts)?;
-    let mut steps = steps::Steps::new(opts.gap_s.unwrap_or(0.0), limit);
+    let mut steps = steps::Steps::new(opts.gap_s.unwrap_or(0.0), median);
     let mut acc = Accumulator::new(opts.bin_s);
     let mut ch = Channel::<N2, F2>::new(1.0);
     let mut flags = Flags::default();
@@ -184,7 +223,10 @@ fn run<R: Read, const C2: usize, const F2: usize, const N2: usize>(
             }
             Some(_) => {
                 let d = row.t - prev;
-                if steps.push(d).ok_or(pass::Stop)? {
+                let Some(gap) = steps.push(d) else {
+                    return Ok(Outcome::TooManySteps);
+                };
+                if gap {
                     ch.mark_gap();
                     flags.gaps += 1;
                     if gap_resets(&model.program, d as f32) {
@@ -205,14 +247,17 @@ fn run<R: Read, const C2: usize, const F2: usize, const N2: usize>(
         let residual = f64::from(out.compensated) - row.reference;
         acc.push(row.t, row.raw - row.reference, residual, row.temperature);
     }
-    let (median, true_limit, consistent) = steps.finish().ok_or(pass::Stop)?;
+    let Some((true_median, _, consistent)) = steps.finish() else {
+        return Ok(Outcome::TooManySteps);
+    };
     if !consistent {
-        return if limit.is_some() {
+        return if median.is_some() {
             Err(pass::Stop)
         } else {
-            Ok(Outcome::Again(true_limit))
+            Ok(Outcome::Again(true_median))
         };
     }
+    let median = true_median;
     let (t0, t1) = (first.unwrap_or(0.0), prev);
     let span = t1 - t0;
     if acc.samples() < 2

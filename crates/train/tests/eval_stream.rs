@@ -280,3 +280,33 @@ fn bad_input_gives_the_in_memory_error() {
     );
     assert!(streamed(&csv, false, &blob, &long).is_err());
 }
+
+/// A jittery logger clock: 80,000 rows at 100 Hz ± 1.5 ms with two dropouts, every step a
+/// different double, more than the streaming reader counts (`MAX_DISTINCT`): its median comes
+/// from the radix selection, and the report is still the in-memory one.
+#[test]
+fn a_jittery_clock_with_more_distinct_steps_than_counted() {
+    let (blob, _, _) = rlg();
+    let mut state = 99u64;
+    let mut csv = b"time_s,t_anode_c,t_cathode_c,t_shell_c,gyro_dph,ref_dph\n".to_vec();
+    let rows = 80_000;
+    assert!(rows > tcomp_train::stream::steps::MAX_DISTINCT);
+    let mut dropout = 0.0;
+    for i in 0..rows {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+        if i == 30_000 || i == 60_000 {
+            dropout += 7.0;
+        }
+        let t = 100.0 + i as f64 * 0.01 + 0.003 * (u - 0.5) + dropout;
+        let temp = 20.0 + 10.0 * (t / 300.0).sin();
+        let gyro = 10.0 + 0.01 * temp + 0.05 * (u - 0.5);
+        csv.extend_from_slice(
+            format!("{t},{},{},{temp:.4},{gyro:.6},10.0\n", temp + 0.3, temp + 0.1).as_bytes(),
+        );
+    }
+    let json = agree(&csv, &blob, &options(&blob, 50.0));
+    assert_eq!(gaps(&json), 2, "{json}");
+}

@@ -169,9 +169,10 @@ impl<R: Read> Rows<R> {
         &self.inputs
     }
 
-    /// The next row inside the window, `None` at the end of the file.
+    /// The time of the next row inside the window (the row's other cells unread), `None` at the
+    /// end of the file; time is checked to increase over every row, in the window or not.
     #[inline]
-    pub fn next_row(&mut self) -> Result<Option<Row>, Stop> {
+    pub fn next_time(&mut self) -> Result<Option<f64>, Stop> {
         loop {
             if !self.rdr.read_byte_record(&mut self.rec).map_err(|_| Stop)? {
                 return Ok(None);
@@ -184,27 +185,35 @@ impl<R: Read> Rows<R> {
                 return Err(Stop);
             }
             self.prev_t = t;
-            if !(t >= self.lo && t < self.hi) {
-                continue;
+            if t >= self.lo && t < self.hi {
+                return Ok(Some(t));
             }
-            for (v, &c) in self.inputs.iter_mut().zip(&self.input_cols) {
-                *v = num(self.rec.get(c))? as f32;
-            }
-            let reference = match self.reference {
-                Reference::Column(c) => num(self.rec.get(c))?,
-                Reference::Value(v) => v,
-            };
-            let temperature = match self.temperature {
-                Some(c) => num(self.rec.get(c))?,
-                None => 0.0,
-            };
-            return Ok(Some(Row {
-                t,
-                raw: num(self.rec.get(self.target))?,
-                reference,
-                temperature,
-            }));
         }
+    }
+
+    /// The next row inside the window, `None` at the end of the file.
+    #[inline]
+    pub fn next_row(&mut self) -> Result<Option<Row>, Stop> {
+        let Some(t) = self.next_time()? else {
+            return Ok(None);
+        };
+        for (v, &c) in self.inputs.iter_mut().zip(&self.input_cols) {
+            *v = num(self.rec.get(c))? as f32;
+        }
+        let reference = match self.reference {
+            Reference::Column(c) => num(self.rec.get(c))?,
+            Reference::Value(v) => v,
+        };
+        let temperature = match self.temperature {
+            Some(c) => num(self.rec.get(c))?,
+            None => 0.0,
+        };
+        Ok(Some(Row {
+            t,
+            raw: num(self.rec.get(self.target))?,
+            reference,
+            temperature,
+        }))
     }
 }
 

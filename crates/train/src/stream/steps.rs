@@ -6,10 +6,11 @@
 //! must be told of a gap before the sample after it. A logger's clock takes few distinct steps
 //! (a fixed rate printed to fixed decimals differs only in the last bits of the parsed time), so
 //! the steps are counted by value: the median is then exact, in memory bounded by the number of
-//! distinct steps ([`MAX_DISTINCT`]), not by the length. Gaps are decided on the way with the
-//! median of the first [`EARLY`] steps, each distinct step remembering how it was decided; at the
-//! end every decision is checked against the true limit, and a record where one differs is read
-//! again with the true limit (the caller's job).
+//! distinct steps, not by the length. Gaps are decided on the way with the median of the first
+//! [`EARLY`] steps, each distinct step remembering how it was decided; at the end every decision is
+//! checked against the true limit, and a record where one differs is read again with the true
+//! median (the caller's job). A jittery clock with more than [`MAX_DISTINCT`] distinct steps has
+//! its median found by [`radix_median`] instead: four readings of the time column, 2¹⁶ counters.
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -34,7 +35,7 @@ impl Hasher for Mix {
 
 type Counts = HashMap<u64, Entry, BuildHasherDefault<Mix>>;
 
-/// Distinct step values counted before the record is declared unfit for streaming.
+/// Distinct step values counted before the median is left to [`radix_median`].
 pub const MAX_DISTINCT: usize = 1 << 16;
 
 /// Steps whose median sets the provisional gap limit.
@@ -51,8 +52,9 @@ struct Entry {
 #[derive(Debug)]
 pub struct Steps {
     gap_s: f64,
-    /// A limit known in advance (a second reading), or `None`: provisional from the early steps.
-    fixed: Option<f64>,
+    /// The median known in advance (a later reading), or `None`: the limit is provisional, from
+    /// the early steps, and the steps are counted.
+    known: Option<f64>,
     early: Vec<f64>,
     counts: Counts,
     /// The last value seen and its not-yet-counted entry (a uniform record hashes nothing).
@@ -61,12 +63,12 @@ pub struct Steps {
 }
 
 impl Steps {
-    /// Steps decided with `--gap` `gap_s` (0 when not given) and, on a second reading, the true
-    /// `limit`.
-    pub fn new(gap_s: f64, limit: Option<f64>) -> Self {
+    /// Steps decided with `--gap` `gap_s` (0 when not given) and, on a later reading, the true
+    /// `median` step (nothing is counted then).
+    pub fn new(gap_s: f64, median: Option<f64>) -> Self {
         Self {
             gap_s,
-            fixed: limit,
+            known: median,
             early: Vec::new(),
             counts: Counts::default(),
             last: None,
@@ -75,11 +77,10 @@ impl Steps {
     }
 
     fn limit_now(&self) -> f64 {
-        if let Some(l) = self.fixed {
-            return l;
-        }
-        let mid = self.early.len() / 2;
-        let m = self.early.get(mid).copied().unwrap_or(0.0);
+        let m = match self.known {
+            Some(m) => m,
+            None => self.early.get(self.early.len() / 2).copied().unwrap_or(0.0),
+        };
         self.gap_s.max(10.0 * m)
     }
 
@@ -87,7 +88,10 @@ impl Steps {
     /// many distinct steps to count.
     #[inline]
     pub fn push(&mut self, d: f64) -> Option<bool> {
-        if self.fixed.is_none() && self.early.len() < EARLY {
+        if self.known.is_some() {
+            return Some(d > self.limit_now());
+        }
+        if self.early.len() < EARLY {
             let at = self.early.partition_point(|&x| x < d);
             self.early.insert(at, d);
         }
@@ -124,6 +128,9 @@ impl Steps {
     /// no step), the true gap limit, and whether every gap was decided as that limit decides it;
     /// `None` when there were too many distinct steps.
     pub fn finish(mut self) -> Option<(f64, f64, bool)> {
+        if let Some(m) = self.known {
+            return Some((m, self.gap_s.max(10.0 * m), true));
+        }
         if let Some((k, e)) = self.last.take() {
             self.flush(k, e)?;
         }
@@ -151,6 +158,54 @@ impl Steps {
     }
 }
 
+/// Bits of a step's pattern settled by each reading of [`radix_median`].
+const RADIX_BITS: u32 = 16;
+
+/// The exact median step (rank `len / 2`, as [`crate::dataset::median_step`]) of a record whose
+/// steps are too many distinct values to count: a radix selection over the bits of the steps
+/// (positive doubles order as their bit patterns do), 16 bits a reading, so four readings and
+/// 2¹⁶ counters whatever the length. `read` feeds every step of the record to its argument once
+/// per call; `None` when a reading fails. With no step the median is 1, as `median_step` says.
+pub fn radix_median(mut read: impl FnMut(&mut dyn FnMut(f64)) -> Option<()>) -> Option<f64> {
+    let mut prefix = 0u64;
+    let mut rank: Option<u64> = None;
+    for round in 0..64 / RADIX_BITS {
+        let settled = round * RADIX_BITS;
+        let shift = 64 - settled - RADIX_BITS;
+        let mut counts = vec![0u64; 1 << RADIX_BITS];
+        read(&mut |d: f64| {
+            let b = d.to_bits();
+            if settled == 0 || b >> (64 - settled) == prefix {
+                let k = ((b >> shift) & ((1 << RADIX_BITS) - 1)) as usize;
+                if let Some(c) = counts.get_mut(k) {
+                    *c += 1;
+                }
+            }
+        })?;
+        let mut r = match rank {
+            Some(r) => r,
+            None => {
+                let total: u64 = counts.iter().sum();
+                if total == 0 {
+                    return Some(1.0);
+                }
+                total / 2
+            }
+        };
+        let mut digit = 0u64;
+        for (k, &c) in counts.iter().enumerate() {
+            if r < c {
+                digit = k as u64;
+                break;
+            }
+            r -= c;
+        }
+        rank = Some(r);
+        prefix = (prefix << RADIX_BITS) | digit;
+    }
+    Some(f64::from_bits(prefix))
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -168,7 +223,7 @@ mod tests {
         let starts = crate::dataset::segments(time, Some(gap_s));
         let truth: Vec<bool> = (1..time.len()).map(|i| starts.contains(&i)).collect();
         assert_eq!(consistent, decided == truth, "limit {limit}");
-        let mut again = Steps::new(gap_s, Some(limit));
+        let mut again = Steps::new(gap_s, Some(median));
         let second: Vec<bool> = time
             .windows(2)
             .map(|w| again.push(w[1] - w[0]).unwrap())
@@ -205,6 +260,31 @@ mod tests {
             !s.finish().unwrap().2,
             "the 2 s step was decided with the early 1 s median"
         );
+    }
+
+    #[test]
+    fn radix_selection_finds_the_median_of_jittery_steps() {
+        let mut state = 7u64;
+        let mut time = vec![0.0];
+        for n in [1usize, 2, 3, 1000, 20_001] {
+            time.truncate(1);
+            for _ in 0..n {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+                let last = *time.last().unwrap();
+                time.push(last + 0.01 + 0.004 * (u - 0.5));
+            }
+            let steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
+            let m = radix_median(|f: &mut dyn FnMut(f64)| {
+                steps.iter().for_each(|&d| f(d));
+                Some(())
+            })
+            .unwrap();
+            assert_eq!(m, median_step(&time), "{n} steps");
+        }
+        assert_eq!(radix_median(|_: &mut dyn FnMut(f64)| Some(())), Some(1.0));
     }
 
     #[test]
