@@ -304,7 +304,12 @@ fn a_jittery_clock_with_more_distinct_steps_than_counted() {
         let temp = 20.0 + 10.0 * (t / 300.0).sin();
         let gyro = 10.0 + 0.01 * temp + 0.05 * (u - 0.5);
         csv.extend_from_slice(
-            format!("{t},{},{},{temp:.4},{gyro:.6},10.0\n", temp + 0.3, temp + 0.1).as_bytes(),
+            format!(
+                "{t},{},{},{temp:.4},{gyro:.6},10.0\n",
+                temp + 0.3,
+                temp + 0.1
+            )
+            .as_bytes(),
         );
     }
     let json = agree(&csv, &blob, &options(&blob, 50.0));
