@@ -40,10 +40,12 @@ pub mod progress;
 pub mod rbf64;
 pub mod rows;
 pub mod spec;
+pub mod stream;
 pub mod train;
 
 pub use dataset::{DataError, Dataset};
 pub use error::TrainError;
 pub use metrics::{EvalReport, Roles};
 pub use spec::{ChannelOptions, FeatureOptions, MethodOptions, RunOptions, Spec};
+pub use stream::{StreamOptions, eval_stream, eval_stream_reader};
 pub use train::{FitOptions, FitSummary, Fitted, Method, evaluate, fit, fit_with_progress};

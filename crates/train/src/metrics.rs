@@ -9,8 +9,12 @@
 //! holds, heating and cooling ramps detected from the temperature rate.
 
 use crate::dataset::{Dataset, segments};
+
+pub mod online;
+#[cfg(test)]
+mod two_pass;
 use crate::error::TrainError;
-use crate::features::{N, bin_mean, bins};
+use crate::features::N;
 use crate::rbf64::C;
 use serde::Serialize;
 use tcomp_core::{Channel, HostModel, Model, Status};
@@ -196,10 +200,6 @@ pub fn std(v: &[f64]) -> f64 {
     (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n).sqrt()
 }
 
-fn msd(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64
-}
-
 fn improvement(raw: f64, res: f64) -> f64 {
     if raw > 0.0 {
         100.0 * (1.0 - res / raw)
@@ -277,37 +277,21 @@ pub struct EvalReport {
     pub gaps_restarted: usize,
 }
 
-/// Computes the report of a run with bins of `bin_s` seconds.
+/// Computes the report of a run with bins of `bin_s` seconds, by feeding its rows in order to the
+/// [`online::Accumulator`] that the streaming evaluator feeds too.
 pub fn report(run: &Run, bin_s: f64) -> EvalReport {
-    let raw_std = std(&run.error);
-    let residual_std = std(&run.residual);
-    let b = bins(&run.time, bin_s);
-    let be = bin_mean(&run.error, &b);
-    let br = bin_mean(&run.residual, &b);
-    let (braw, bres) = (std(&be), std(&br));
-    EvalReport {
-        samples: run.time.len(),
-        raw_std,
-        residual_std,
-        improvement_pct: improvement(raw_std, residual_std),
-        raw_rms: msd(&run.error).sqrt(),
-        residual_rms: msd(&run.residual).sqrt(),
-        max_abs_residual: run.residual.iter().fold(0.0, |m, v| m.max(v.abs())),
-        msd_before: msd(&run.error),
-        msd_after: msd(&run.residual),
-        binned: Binned {
-            seconds: bin_s,
-            bins: b.len(),
-            raw_std: braw,
-            residual_std: bres,
-            improvement_pct: improvement(braw, bres),
-        },
-        segments: segment_table(run),
-        out_of_range_pct: 100.0 * run.out_of_range as f64 / run.time.len().max(1) as f64,
-        input_faults: run.faults,
-        gaps: run.gaps,
-        gaps_restarted: run.restarted.len(),
+    let mut acc = online::Accumulator::new(bin_s);
+    for (i, &t) in run.time.iter().enumerate() {
+        let at = |v: &[f64]| v.get(i).copied().unwrap_or(0.0);
+        acc.push(t, at(&run.error), at(&run.residual), at(&run.temperature));
     }
+    let flags = online::Flags {
+        out_of_range: run.out_of_range,
+        faults: run.faults,
+        gaps: run.gaps,
+        restarted: run.restarted.len(),
+    };
+    acc.finish(crate::dataset::median_step(&run.time), flags)
 }
 
 /// Threshold between a hold and a ramp, in temperature units per minute.
@@ -316,76 +300,5 @@ pub const HOLD_RATE_PER_MIN: f64 = 0.1;
 /// Splits a run into holds, heating and cooling ramps from the temperature rate (60 s bins, central
 /// differences; runs shorter than 5 bins are merged into the previous one).
 pub fn segment_table(run: &Run) -> Vec<SegmentStats> {
-    let b = bins(&run.time, 60.0);
-    if b.len() < 3 {
-        return Vec::new();
-    }
-    let tm = bin_mean(&run.temperature, &b);
-    let ts = bin_mean(&run.time, &b);
-    let n = b.len();
-    let rate: Vec<f64> = (0..n)
-        .map(|i| {
-            let (a, c) = (i.saturating_sub(1), (i + 1).min(n - 1));
-            let dt = ts.get(c).copied().unwrap_or(0.0) - ts.get(a).copied().unwrap_or(0.0);
-            let dtemp = tm.get(c).copied().unwrap_or(0.0) - tm.get(a).copied().unwrap_or(0.0);
-            if dt > 0.0 { 60.0 * dtemp / dt } else { 0.0 }
-        })
-        .collect();
-    let kind = |r: f64| -> i8 {
-        if r > HOLD_RATE_PER_MIN {
-            1
-        } else if r < -HOLD_RATE_PER_MIN {
-            -1
-        } else {
-            0
-        }
-    };
-    // Runs of equal kind over bins: (kind, first bin, last bin exclusive).
-    let mut runs: Vec<(i8, usize, usize)> = Vec::new();
-    for (i, r) in rate.iter().enumerate() {
-        let k = kind(*r);
-        match runs.last_mut() {
-            Some(last) if last.0 == k => last.2 = i + 1,
-            _ => runs.push((k, i, i + 1)),
-        }
-    }
-    let mut merged: Vec<(i8, usize, usize)> = Vec::new();
-    for r in runs {
-        match merged.last_mut() {
-            Some(last) if last.0 == r.0 || r.2 - r.1 < 5 => last.2 = r.2,
-            Some(last) if last.2 - last.1 < 5 => {
-                last.0 = r.0;
-                last.2 = r.2;
-            }
-            _ => merged.push(r),
-        }
-    }
-    merged
-        .iter()
-        .map(|&(k, b0, b1)| {
-            let s = b.get(b0).map_or(0, |x| x.0);
-            let e = if b1 >= n {
-                run.time.len()
-            } else {
-                b.get(b1).map_or(run.time.len(), |x| x.0)
-            };
-            let err = run.error.get(s..e).unwrap_or(&[]);
-            let res = run.residual.get(s..e).unwrap_or(&[]);
-            let rates = rate.get(b0..b1).unwrap_or(&[]);
-            SegmentStats {
-                kind: match k {
-                    1 => "heating",
-                    -1 => "cooling",
-                    _ => "hold",
-                }
-                .to_string(),
-                start_s: run.time.get(s).copied().unwrap_or(0.0),
-                end_s: run.time.get(e.saturating_sub(1)).copied().unwrap_or(0.0),
-                samples: e.saturating_sub(s),
-                rate_per_min: rates.iter().sum::<f64>() / rates.len().max(1) as f64,
-                raw_std: std(err),
-                residual_std: std(res),
-            }
-        })
-        .collect()
+    report(run, 60.0).segments
 }

@@ -1,4 +1,7 @@
 //! `tcomp eval --model MODEL --data FILE`: measure a blob on a run, through the core's f32 evaluator.
+//!
+//! The run is streamed ([`tcomp_train::eval_stream`]): memory stays bounded whatever the log's
+//! length, and the figures and errors are those of loading it whole.
 use super::json::{self, RunFigures, Subject};
 use super::run::RunArgs;
 use crate::render::num::{SIG, num, pct, plain, signed};
@@ -35,16 +38,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let bytes = tcomp_train::blob_io::read(&args.model)?;
     let model = tcomp_train::blob_io::decode(&args.model, &bytes)?;
     let roles = args.run.roles(&model);
-    let progress = super::progress::spinner(args.quiet, "loading data");
-    let data = args.run.load(&roles.time)?;
-    progress.set_message("evaluating");
-    let report = tcomp_train::evaluate(
+    let progress = super::progress::spinner(args.quiet, "evaluating");
+    let report = tcomp_train::eval_stream(
+        &args.run.data,
         &model,
-        &data,
-        &roles,
-        args.bin,
-        args.temperature.as_deref(),
-        args.run.run.gap,
+        &args
+            .run
+            .stream(roles.clone(), args.bin, args.temperature.clone()),
     )?;
     progress.finish_and_clear();
     let subject = Subject::new(

@@ -108,4 +108,22 @@ impl RunArgs {
         }
         Ok(data)
     }
+
+    /// The options of a streamed evaluation of `--data` ([`tcomp_train::eval_stream`]) with
+    /// these roles, bins of `bin_s` seconds and the segment temperature column.
+    pub fn stream(
+        &self,
+        roles: Roles,
+        bin_s: f64,
+        temperature: Option<String>,
+    ) -> tcomp_train::StreamOptions {
+        tcomp_train::StreamOptions {
+            roles,
+            bin_s,
+            temperature,
+            gap_s: self.run.gap,
+            from: self.run.from,
+            until: self.run.until,
+        }
+    }
 }
