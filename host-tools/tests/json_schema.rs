@@ -244,6 +244,31 @@ fn calibrate_summary_speaks_the_schema() {
     let file = std::fs::read_to_string(out.join("summary.json")).unwrap();
     assert_eq!(file.trim(), text.trim());
     assert_eq!(v["channels"].as_array().unwrap().len(), 6);
+    // `tcomp image --json` on two of the blobs calibrate wrote, for the MEMS board.
+    let board = Path::new(env!("CARGO_MANIFEST_DIR")).join("../firmware/descriptions/mems6.toml");
+    let image = out.join("again.bin");
+    let gx = format!("0={}", out.join("gyro_x_rad_s.tcm").display());
+    let az = format!("5={}", out.join("acc_z_m_s2.tcm").display());
+    let (text, img) = tcomp(&[
+        "image",
+        "--board",
+        board.to_str().unwrap(),
+        "--serial",
+        "7",
+        "--model",
+        &gx,
+        "--model",
+        &az,
+        "--json",
+        "--out",
+        image.to_str().unwrap(),
+    ]);
+    assert_valid(&schema, "image", &text, &img);
+    assert_eq!(img["channels"].as_array().unwrap().len(), 2);
+    assert_eq!(
+        img["bytes"].as_u64().unwrap(),
+        std::fs::metadata(&image).unwrap().len()
+    );
     let mut broken = v.clone();
     broken["channels"][0]["shipped"] = "best".into();
     assert!(

@@ -39,6 +39,31 @@ pub struct Args {
     /// Where to write the image.
     #[arg(long)]
     pub out: PathBuf,
+    /// Print what was written as JSON (the shared vocabulary: `command`, `subject`, then the
+    /// image's fields).
+    #[arg(long)]
+    pub json: bool,
+    /// Print nothing on success (errors still go to stderr).
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// `tcomp image --json`'s own fields.
+#[derive(serde::Serialize)]
+struct ImageJson {
+    out: String,
+    bytes: usize,
+    board: String,
+    board_hash: String,
+    serial: u64,
+    channels: Vec<ChannelJson>,
+}
+
+/// One channel of the image in `--json`.
+#[derive(serde::Serialize)]
+struct ChannelJson {
+    id: u16,
+    model: String,
 }
 
 fn parse_serial(s: &str) -> Result<u64, String> {
@@ -263,6 +288,30 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
     super::output::check_file_output("--out", &args.out)?;
     tcomp_train::blob_io::write_atomic(&args.out, &image)?;
+    if args.json {
+        let subject = super::json::Subject {
+            models: blobs.iter().map(|b| b.path.display().to_string()).collect(),
+            ..Default::default()
+        };
+        let body = ImageJson {
+            out: args.out.display().to_string(),
+            bytes: image.len(),
+            board: board.name.clone(),
+            board_hash: format!("{:016x}", board.hash()),
+            serial: args.serial,
+            channels: blobs
+                .iter()
+                .map(|b| ChannelJson {
+                    id: b.id,
+                    model: b.path.display().to_string(),
+                })
+                .collect(),
+        };
+        return super::json::print("image", &subject, &body);
+    }
+    if args.quiet {
+        return Ok(());
+    }
     outln!(
         "wrote {} ({} bytes, {} models for board {} (hash {:016x}), unit {}): flash it at 0x003F0000",
         args.out.display(),
