@@ -11,9 +11,10 @@
 
 //!
 //! A version-2 image carries the board's channel table and the unit serial it was made for. The
-//! firmware checks, before any model runs: the serial ([`check_unit`]); the table against its own
-//! capacities and wiring ([`check_table`]); and each blob against its row (`App::load`). Any
-//! failure is a status the boot report names, never a panic.
+//! firmware checks, before any model runs: the serial ([`check_unit`]); the board hash against
+//! the one of the description its table was generated from ([`check_board`]); the table against
+//! its own capacities and wiring ([`check_table`]); and each blob against its row (`App::load`).
+//! Any failure is a status the boot report names, never a panic.
 
 pub use tcomp_core::image::{
     ChannelRow, ENTRY_LEN, HEADER_LEN, Image, ImageError, MAGIC, MAX_ENTRIES, Source, VERSION,
@@ -42,6 +43,20 @@ pub enum TableError {
     /// Channel `id`'s row is wired differently from the board's channel configuration (another
     /// counter, or an input on another thermometer), or the board has no channel `id`.
     Wiring(u16),
+    /// The image was made for another board description than the one this firmware was built
+    /// for (its board hash differs): another thermometer type or constant, sensor or unit on some
+    /// row, even where the wiring would match.
+    OtherBoard,
+}
+
+/// Checks a version-2 image's board hash against `expected`, the hash of the description the
+/// firmware's channel table was generated from (`wiring::NAME_HASH`); `None` (a table not made
+/// from a description) and a version-1 image pass.
+pub fn check_board(image: &Image<'_>, expected: Option<u64>) -> Result<(), TableError> {
+    match (image.header(), expected) {
+        (Some(h), Some(e)) if h.board_hash != e => Err(TableError::OtherBoard),
+        _ => Ok(()),
+    }
 }
 
 /// Checks a version-2 image's channel table against the firmware's capacities, the board's

@@ -123,12 +123,12 @@ fn each_blob_loads_on_its_own_row_and_the_unit_is_checked() {
     let (_, rows) = rows_of(&IMU6, imu6_sensor);
     let image = imu6_image(&rows, &rlg_blobs());
     let mut app = App::new(&IMU6);
-    let r = app.load_for_unit(&image, SERIAL, MAX_COUNTERS, MAX_THERMOMETERS);
+    let r = app.load_for_unit(&image, SERIAL, None, MAX_COUNTERS, MAX_THERMOMETERS);
     assert_eq!(&r[..3], &[Ok(()), Ok(()), Ok(())]);
     assert_eq!(r[3], Err(LoadError::Image(ImageError::Missing)));
     assert_eq!(LoadError::code(&r[0]), 0);
 
-    let r = app.load_for_unit(&image, SERIAL + 1, MAX_COUNTERS, MAX_THERMOMETERS);
+    let r = app.load_for_unit(&image, SERIAL + 1, None, MAX_COUNTERS, MAX_THERMOMETERS);
     let other = Err(LoadError::Image(ImageError::OtherUnit));
     assert!(r.iter().all(|x| *x == other), "{r:?}");
     assert_eq!(crate::image::check_unit(&image, SERIAL), Ok(()));
@@ -148,7 +148,7 @@ fn an_entry_pointing_at_another_channels_valid_blob_is_refused() {
     blobs[2] = blob(SensorKind::Qma, "z", "ug", 9);
     let image = imu6_image(&rows, &blobs);
     let mut app = App::new(&IMU6);
-    let r = app.load_for_unit(&image, SERIAL, MAX_COUNTERS, MAX_THERMOMETERS);
+    let r = app.load_for_unit(&image, SERIAL, None, MAX_COUNTERS, MAX_THERMOMETERS);
     assert_eq!(r[0], Err(LoadError::WrongChannel));
     assert_eq!(r[1], Ok(()));
     assert_eq!(r[2], Err(LoadError::WrongChannel));
@@ -162,7 +162,7 @@ fn a_table_the_board_cannot_run_loads_nothing() {
     moved[1].source = Source::Counter(4);
     let image = imu6_image(&moved, &rlg_blobs());
     let mut app = App::new(&IMU6);
-    let r = app.load_for_unit(&image, SERIAL, MAX_COUNTERS, MAX_THERMOMETERS);
+    let r = app.load_for_unit(&image, SERIAL, None, MAX_COUNTERS, MAX_THERMOMETERS);
     assert!(
         r[..6]
             .iter()
@@ -171,17 +171,17 @@ fn a_table_the_board_cannot_run_loads_nothing() {
     // A board with fewer counters than the table names.
     let image = imu6_image(&rows, &rlg_blobs());
     let mut app = App::new(&IMU6);
-    let r = app.load_for_unit(&image, SERIAL, 4, MAX_THERMOMETERS);
+    let r = app.load_for_unit(&image, SERIAL, None, 4, MAX_THERMOMETERS);
     assert_eq!(r[0], Err(LoadError::Table(TableError::Source(4))));
     // A board with fewer converters than the table's thermometers.
-    let r = app.load_for_unit(&image, SERIAL, 6, 11);
+    let r = app.load_for_unit(&image, SERIAL, None, 6, 11);
     assert_eq!(r[0], Err(LoadError::Table(TableError::Thermometer(5))));
     // A row whose input is another thermometer than the board's wiring.
     let mut crossed = rows.clone();
     crossed[0].inputs[0].thermometer = 3;
     let image = imu6_image(&crossed, &rlg_blobs());
     let mut app = App::new(&IMU6);
-    let r = app.load_for_unit(&image, SERIAL, MAX_COUNTERS, MAX_THERMOMETERS);
+    let r = app.load_for_unit(&image, SERIAL, None, MAX_COUNTERS, MAX_THERMOMETERS);
     assert_eq!(r[0], Err(LoadError::Table(TableError::Wiring(0))));
 }
 
@@ -222,7 +222,7 @@ fn an_ifog_triad_runs_its_own_models_through_the_same_loop() {
     let mut image = vec![0u8; spec.image_len().unwrap()];
     spec.write(&mut image).unwrap();
     let mut app = App::new(&IFOG3);
-    let r = app.load_for_unit(&image, SERIAL, 3, 3);
+    let r = app.load_for_unit(&image, SERIAL, None, 3, 3);
     assert_eq!(&r[..3], &[Ok(()), Ok(()), Ok(())], "{r:?}");
     let mut out = [Record::default(); 3];
     for _ in 0..10 {
@@ -322,14 +322,31 @@ impl Thermometer for Die {
 #[test]
 fn a_mems_imu_runs_its_real_models_from_the_tools_image_on_sample_sources() {
     let mut app = App::new(&MEMS6);
-    let r = app.load_for_unit(MEMS6_IMAGE, 0x5EED, 6, 1);
+    let hash = Some(crate::wiring::MEMS6_HASH);
+    let r = app.load_for_unit(MEMS6_IMAGE, 0x5EED, hash, 6, 1);
     assert_eq!(&r[..6], &[Ok(()); 6], "{r:?}");
-    // The same image on the RLG/QMA wiring: its table is refused, nothing loads.
+    // The same image on the RLG/QMA wiring: refused as another board's, nothing loads; and by
+    // its table alone when the firmware's table has no description hash.
     let mut rlg = App::new(&IMU6);
-    let r = rlg.load_for_unit(MEMS6_IMAGE, 0x5EED, MAX_COUNTERS, MAX_THERMOMETERS);
+    let imu6 = Some(crate::wiring::IMU6_RLG_QMA_HASH);
+    let r = rlg.load_for_unit(MEMS6_IMAGE, 0x5EED, imu6, MAX_COUNTERS, MAX_THERMOMETERS);
+    let other = Err(LoadError::Table(TableError::OtherBoard));
+    assert!(r[..6].iter().all(|x| *x == other), "{r:?}");
+    assert_eq!(LoadError::code(&r[0]), 9);
+    let r = rlg.load_for_unit(MEMS6_IMAGE, 0x5EED, None, MAX_COUNTERS, MAX_THERMOMETERS);
     assert!(
         r.iter().all(|x| matches!(x, Err(LoadError::Table(_)))),
         "{r:?}"
+    );
+    // A firmware for a description with this very wiring but another hash (another thermometer
+    // constant, sensor or unit on some row): the wiring matches, the image is still refused.
+    let mut twin = App::new(&MEMS6);
+    let r = twin.load_for_unit(MEMS6_IMAGE, 0x5EED, hash.map(|h| h ^ 1), 6, 1);
+    assert!(r[..6].iter().all(|x| *x == other), "{r:?}");
+    assert!(
+        twin.load_for_unit(MEMS6_IMAGE, 0x5EED, hash, 6, 1)[..6]
+            .iter()
+            .all(Result::is_ok)
     );
 
     let registers = [

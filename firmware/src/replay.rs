@@ -81,6 +81,16 @@ pub const CONFIG_IMU6: u16 = 0;
 /// Configuration code of [`crate::app::IFOG1`].
 pub const CONFIG_IFOG1: u16 = 1;
 
+/// The board hash of configuration `code`'s description (`wiring::NAME_HASH`): what the replay's
+/// boot compares an image's board hash with.
+pub fn board_hash(code: u16) -> Option<u64> {
+    match code {
+        CONFIG_IMU6 => Some(crate::wiring::IMU6_RLG_QMA_HASH),
+        CONFIG_IFOG1 => Some(crate::wiring::IFOG1_HASH),
+        _ => None,
+    }
+}
+
 fn u16_at(b: &[u8], at: usize) -> u16 {
     b.get(at..at + 2)
         .map_or(0, |s| u16::from_le_bytes([s[0], s[1]]))

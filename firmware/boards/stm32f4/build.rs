@@ -33,6 +33,8 @@ fn main() -> Result<(), Box<dyn Error>> {
         format!(
             "/// The channel table this binary runs: `firmware/descriptions/{board}.toml` (`TCOMP_BOARD`).\n\
              pub const CONFIG: &[tcomp_firmware::app::ChannelConfig] = &tcomp_firmware::wiring::{name};\n\
+             /// Its board hash: an image made for another description loads no model.\n\
+             pub const CONFIG_HASH: u64 = tcomp_firmware::wiring::{name}_HASH;\n\
              /// The RTD of each thermometer of `{board}.toml`, in its order (converter k, AIN0/AIN1).\n\
              pub const RTDS: &[tcomp_hal::rtd::Rtd] = &[{rtds}];\n"
         ),

@@ -3,7 +3,7 @@
 //! thermometers; a channel that fails runs with `NO_MODEL` and says why ([`LoadError`]).
 
 use super::{App, FwModel, MAX_CHANNELS, MAX_COUNTERS, MAX_THERMOMETERS};
-use crate::image::{Image, ImageError, TableError, check_table};
+use crate::image::{Image, ImageError, TableError, check_board, check_table};
 use tcomp_core::BlobError;
 
 /// Why a channel has no model.
@@ -35,6 +35,7 @@ impl LoadError {
             Err(Self::Image(_)) => 3,
             Err(Self::Blob(_)) => 4,
             Err(Self::Unwired) => 5,
+            Err(Self::Table(TableError::OtherBoard)) => 9,
             Err(Self::Table(_)) => 6,
             Err(Self::NotInTable) => 7,
             Err(Self::WrongChannel) => 8,
@@ -46,31 +47,36 @@ impl<'a> App<'a> {
     /// Loads every channel's model from the image bytes; returns each channel's outcome. A channel
     /// that fails keeps running without a model. No unit check: see [`App::load_for_unit`].
     pub fn load(&mut self, image: &'a [u8]) -> [Result<(), LoadError>; MAX_CHANNELS] {
-        self.load_checked(Image::parse(image), MAX_COUNTERS, MAX_THERMOMETERS)
+        self.load_checked(Image::parse(image), None, MAX_COUNTERS, MAX_THERMOMETERS)
     }
 
     /// [`App::load`] for the unit with serial `unit_serial` on a board with `counters` counter (or
-    /// sample) channels and `thermometers` converters: an image made for another unit, or whose
-    /// channel table the board cannot run, loads no model at all (every channel says why).
+    /// sample) channels and `thermometers` converters, built for the board description whose hash
+    /// is `board_hash` (`wiring::NAME_HASH`; `None` for a table not made from a description): an
+    /// image made for another unit or another board description, or whose channel table the
+    /// board cannot run, loads no model at all (every channel says why).
     pub fn load_for_unit(
         &mut self,
         image: &'a [u8],
         unit_serial: u64,
+        board_hash: Option<u64>,
         counters: usize,
         thermometers: usize,
     ) -> [Result<(), LoadError>; MAX_CHANNELS] {
         let image = Image::parse(image).and_then(|i| i.check_unit(unit_serial).map(|()| i));
-        self.load_checked(image, counters, thermometers)
+        self.load_checked(image, board_hash, counters, thermometers)
     }
 
     fn load_checked(
         &mut self,
         image: Result<Image<'a>, ImageError>,
+        board_hash: Option<u64>,
         counters: usize,
         thermometers: usize,
     ) -> [Result<(), LoadError>; MAX_CHANNELS] {
         let table = match &image {
-            Ok(i) => check_table(i, self.config, counters, thermometers),
+            Ok(i) => check_board(i, board_hash)
+                .and_then(|()| check_table(i, self.config, counters, thermometers)),
             Err(_) => Ok(()),
         };
         core::array::from_fn(|k| {

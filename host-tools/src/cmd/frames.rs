@@ -72,6 +72,7 @@ fn report_json(r: &BootReport) -> serde_json::Value {
         6 => "channel table refused",
         7 => "channel not in the image's table",
         8 => "blob made for another channel",
+        9 => "image made for another board description",
         _ => "unknown",
     };
     json!({

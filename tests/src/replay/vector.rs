@@ -217,7 +217,13 @@ pub fn build<const K: usize>(
     let (outputs, frames, statuses, served) = {
         let v = Vector::parse(&bytes).map_err(|e| anyhow::anyhow!("vector: {e:?}"))?;
         let mut app = App::new(config);
-        let loaded = app.load_for_unit(image, UNIT_SERIAL, v.counters, v.thermometers);
+        let loaded = app.load_for_unit(
+            image,
+            UNIT_SERIAL,
+            tcomp_firmware::replay::board_hash(config_code),
+            v.counters,
+            v.thermometers,
+        );
         for (c, r) in config.iter().zip(loaded) {
             if let Err(e) = r {
                 eprintln!("host: channel {}: no model ({e:?})", c.name);

@@ -171,6 +171,7 @@ mod app {
         let loaded = app.load_for_unit(
             image,
             unit,
+            Some(crate::CONFIG_HASH),
             tcomp_firmware::app::MAX_COUNTERS,
             crate::setup::THERMOMETERS,
         );

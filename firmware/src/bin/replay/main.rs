@@ -173,7 +173,13 @@ fn load(
     image: &'static [u8],
     vector: &Vector<'static>,
 ) -> [Result<(), LoadError>; MAX_CHANNELS] {
-    app.load_for_unit(image, UNIT_SERIAL, vector.counters, vector.thermometers)
+    app.load_for_unit(
+        image,
+        UNIT_SERIAL,
+        tcomp_firmware::replay::board_hash(vector.config),
+        vector.counters,
+        vector.thermometers,
+    )
 }
 
 /// Writes the boot report into [`REPORT`] and logs it. Not inlined: its temporaries are not on
