@@ -83,9 +83,14 @@ fn both_runs<S: Real>(
     (a, b)
 }
 
+/// Compares the three filter features (lag, rate, lag difference). Not the fourth, `hyst` of the
+/// rate: a relay. The rate of an arbitrary history relaxing to the slope across the gap need not be
+/// monotone, so the gap-free run can switch on a transient inside the gap that the sample after it
+/// never sees (a proptest case found one); the relay after a gap acts on the carried rate, as
+/// `hysteresis_keeps_its_state_across_a_gap` checks.
 fn assert_close<S: Real + Into<f64>>(a: &[[S; 4]], b: &[[S; 4]], tol: f64, what: &str) {
     for (n, (ra, rb)) in a.iter().zip(b).enumerate() {
-        for k in 0..4 {
+        for k in 0..3 {
             let (x, y): (f64, f64) = (ra[k].into(), rb[k].into());
             assert!(
                 (x - y).abs() <= tol * (1.0 + x.abs()),
@@ -98,7 +103,8 @@ fn assert_close<S: Real + Into<f64>>(a: &[[S; 4]], b: &[[S; 4]], tol: f64, what:
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
-    /// Where the input was linear across the gap, the filters after it are the gap-free run's.
+    /// Where the input was linear across the gap, the filters after it are the gap-free run's
+    /// (see [`assert_close`] for the relay).
     #[test]
     fn a_gap_over_a_linear_input_is_the_gap_free_run(
         tau in 5.0f64..3000.0,
