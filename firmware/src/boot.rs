@@ -56,28 +56,3 @@ pub fn report(
     r.set_channels(channels.get(..n).unwrap_or(&[]));
     r
 }
-
-/// Logs `report` and each channel's load outcome over defmt (every board's boot): one line for the
-/// image, one per channel.
-#[cfg(target_os = "none")]
-pub fn log(report: &BootReport, config: &[ChannelConfig], loaded: &[Result<(), LoadError>]) {
-    defmt::info!(
-        "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
-        report.unit_serial,
-        report.image_version,
-        report.image_serial,
-        report.image_state,
-        report.board_hash,
-        report.image_crc
-    );
-    for (cfg, r) in config.iter().zip(loaded.iter()) {
-        match r {
-            Ok(()) => defmt::info!("channel {=str}: model loaded", cfg.name),
-            Err(e) => defmt::warn!(
-                "channel {=str}: no model ({}), raw passed through",
-                cfg.name,
-                e
-            ),
-        }
-    }
-}

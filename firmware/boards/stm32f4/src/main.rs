@@ -181,7 +181,25 @@ mod app {
                 | crate::fault::ResetCause::IndependentWatchdog
         );
         let report = tcomp_firmware::boot::report(image, unit, CONFIG, &loaded, watchdog);
-        tcomp_firmware::boot::log(&report, CONFIG, &loaded);
+        defmt::info!(
+            "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
+            report.unit_serial,
+            report.image_version,
+            report.image_serial,
+            report.image_state,
+            report.board_hash,
+            report.image_crc
+        );
+        for (cfg, r) in CONFIG.iter().zip(loaded.iter()) {
+            match r {
+                Ok(()) => defmt::info!("channel {=str}: model loaded", cfg.name),
+                Err(e) => defmt::warn!(
+                    "channel {=str}: no model ({}), raw passed through",
+                    cfg.name,
+                    e
+                ),
+            }
+        }
         let (producer, consumer) = cx.local.queue.split();
         (
             Shared { producer },

@@ -195,7 +195,24 @@ fn write_report(
 ) {
     *report = tcomp_firmware::boot::report(image, UNIT_SERIAL, config, loaded, watchdog);
     report.sequence = next;
-    tcomp_firmware::boot::log(report, config, loaded);
+    defmt::info!(
+        "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
+        report.unit_serial,
+        report.image_version,
+        report.image_serial,
+        report.image_state,
+        report.board_hash,
+        report.image_crc
+    );
+    for (cfg, r) in config.iter().zip(loaded.iter()) {
+        if let Err(e) = r {
+            defmt::warn!(
+                "channel {=str}: no model ({}), raw passed through",
+                cfg.name,
+                e
+            );
+        }
+    }
 }
 
 /// The boot report's static, for `main` to fill and hand to the loop.
