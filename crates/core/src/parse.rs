@@ -144,6 +144,37 @@ pub fn is_identifier(s: &str) -> bool {
         && bytes.all(|b| b.is_ascii_alphanumeric() || b == b'_')
 }
 
+/// True for a column name the expressions can spell: an identifier, optionally followed by
+/// `.field` and `[instance]` parts, as the columns of autopilot logs are named (`sensor_gyro.x`,
+/// `IMU[1].GyrX`, `sensor_accel[2].temperature`). Signal names stay plain identifiers.
+pub fn is_column_name(s: &str) -> bool {
+    let Some(first) = s.split(['.', '[']).next() else {
+        return false;
+    };
+    if !is_identifier(first) {
+        return false;
+    }
+    let mut rest = s.get(first.len()..).unwrap_or("");
+    while !rest.is_empty() {
+        if let Some(r) = rest.strip_prefix('.') {
+            let part = r.split(['.', '[']).next().unwrap_or("");
+            if !is_identifier(part) {
+                return false;
+            }
+            rest = r.get(part.len()..).unwrap_or("");
+        } else if let Some(r) = rest.strip_prefix('[') {
+            let digits = r.bytes().take_while(u8::is_ascii_digit).count();
+            if digits == 0 || r.as_bytes().get(digits) != Some(&b']') {
+                return false;
+            }
+            rest = r.get(digits + 1..).unwrap_or("");
+        } else {
+            return false;
+        }
+    }
+    true
+}
+
 /// True for a built-in function name.
 pub fn is_function(s: &str) -> bool {
     lang::function(s).is_some()

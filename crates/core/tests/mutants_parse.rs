@@ -355,3 +355,29 @@ fn a_name_is_a_signal_first_then_an_input_read_once_per_use() {
     st.features(&p, &mut out).unwrap();
     assert_eq!(out[0], 20.0 + 1.0 + 10.0);
 }
+
+/// Autopilot log columns (`topic.field`, `MSG[instance].Field`) are names in expressions, one
+/// input each; a half-written suffix is not a name.
+#[test]
+fn log_column_names_are_inputs() {
+    for ok in [
+        "sensor_gyro.x",
+        "IMU.T",
+        "IMU[1].GyrX",
+        "sensor_accel[2].temperature",
+        "sensor_combined.gyro_rad[0]",
+    ] {
+        assert!(tcomp_core::parse::is_column_name(ok), "{ok}");
+    }
+    for bad in ["", "IMU.", "IMU[]", "IMU[1", "IMU[a].T", ".T", "IMU..T", "IMU.1x", "a b"] {
+        assert!(!tcomp_core::parse::is_column_name(bad), "{bad:?}");
+    }
+    let mut b = ProgramBuilder::<'static, 16, 4>::new();
+    b.feature("rate(IMU[1].T)").unwrap();
+    b.feature("IMU[1].T - sensor_gyro.temperature").unwrap();
+    let p = b.finish().unwrap();
+    assert_eq!(&p.inputs[..], ["IMU[1].T", "sensor_gyro.temperature"]);
+    let mut b = ProgramBuilder::<'static, 16, 4>::new();
+    assert!(b.feature("IMU[1.T").is_err());
+    assert!(b.feature("IMU.").is_err());
+}

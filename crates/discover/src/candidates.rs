@@ -26,7 +26,7 @@ use crate::families::{Template, existing_rate, kind_named, language_has};
 use crate::program;
 use serde::Serialize;
 use tcomp_core::expr::{self, Expr};
-use tcomp_core::parse::is_identifier;
+use tcomp_core::parse::is_column_name;
 use tcomp_train::Dataset;
 
 pub use crate::families::Search;
@@ -169,7 +169,7 @@ pub fn sources(data: &Dataset, exclude: &[&str], signals: &[String]) -> Sources 
         }
     }
     for name in data.names() {
-        if exclude.contains(&name.as_str()) || !is_identifier(name) {
+        if exclude.contains(&name.as_str()) || !is_column_name(name) {
             continue;
         }
         let Ok(col) = data.column(name) else { continue };

@@ -233,6 +233,7 @@ impl<'a, const N: usize, const F: usize, S: Real> Parser<'a, '_, N, F, S> {
             {
                 self.pos += 1;
             }
+            self.column_suffix();
             let name = self.src.get(start..self.pos).unwrap_or("");
             let end = self.pos;
             if self.eat(b'(') {
@@ -258,6 +259,37 @@ impl<'a, const N: usize, const F: usize, S: Real> Parser<'a, '_, N, F, S> {
             ParseErrorKind::UnexpectedChar
         };
         Err(self.err_at(start, start + 1, kind))
+    }
+
+    /// The rest of a column name read from an autopilot log: `.field` and `[instance]` parts after
+    /// the first identifier (`sensor_gyro.x`, `IMU[1].GyrX`; [`crate::parse::is_column_name`]).
+    /// Nothing else in the language uses `.` after a name or `[`, so the name stays one token.
+    fn column_suffix(&mut self) {
+        let bytes = self.src.as_bytes();
+        loop {
+            let at = self.pos;
+            match bytes.get(at) {
+                Some(b'.') if bytes.get(at + 1).is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_') => {
+                    self.pos = at + 1;
+                    while self
+                        .peek()
+                        .is_some_and(|c| c.is_ascii_alphanumeric() || c == b'_')
+                    {
+                        self.pos += 1;
+                    }
+                }
+                Some(b'[') => {
+                    let digits = bytes
+                        .get(at + 1..)
+                        .map_or(0, |r| r.iter().take_while(|c| c.is_ascii_digit()).count());
+                    if digits == 0 || bytes.get(at + 1 + digits) != Some(&b']') {
+                        return;
+                    }
+                    self.pos = at + digits + 2;
+                }
+                _ => return,
+            }
+        }
     }
 
     fn number(&mut self) -> Result<u8, ParseError> {
