@@ -53,6 +53,9 @@ enum Command {
     /// Calibrate a whole unit (or a folder of units) from one spec: fit, verify on held-out data,
     /// diagnose, report, and pack the image.
     Calibrate(Box<cmd::calibrate::Args>),
+    /// Write the thermal calibration an autopilot's own tool computes from its log: PX4's TC_*
+    /// parameters from a ULog, ArduPilot's INS_TCALn_* from a DataFlash log.
+    AutopilotParams(cmd::autopilot::Args),
     /// Replace a unit's model image over its serial link (A/B slots, verified, committed last).
     Flash(cmd::flash::Args),
 }
@@ -84,6 +87,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Simulate(args) => cmd::simulate::run(&args),
         Command::Image(args) => cmd::image::run(&args),
         Command::Calibrate(args) => cmd::calibrate::run(&args),
+        Command::AutopilotParams(args) => cmd::autopilot::run(&args),
         Command::Diagnose(args) => cmd::diagnose::run(&args),
         Command::Compare(args) => cmd::compare::run(&args),
         Command::Report(args) => cmd::report::run(&args),

@@ -12,23 +12,63 @@
 //! as one long column name), a truncated or mislabelled gzip file, a file or a `--from`/`--until`
 //! window with fewer than two rows. Cell text and names echoed in an error are clipped to
 //! [`MAX_ECHO_CHARS`] characters, so a 5 MB cell does not become a 5 MB message.
+//!
+//! Autopilot logs read as tables too ([`log`]): a PX4 ULog (`.ulg`) or an ArduPilot DataFlash log
+//! (`.bin`) is recognised by its first bytes, and its messages become columns named
+//! `topic.field` / `MSG.Field`. And what chamber loggers write — repeated or backward time, empty
+//! and NaN cells — is handled by the documented policies of [`clean`], whose counts the dataset
+//! carries as [`Dataset::notes`].
 
 use crate::progress::{CountingReader, Progress, Silent, Unit};
 use flate2::read::MultiGzDecoder;
 use std::io::Read;
 use std::path::Path;
 
+pub mod clean;
 mod csv_read;
+mod dataflash;
 mod error;
+pub mod log;
+mod ulog;
 
+pub use clean::{LoadOptions, Missing, RepeatedTime};
 use csv_read::{Newlines, check_duplicates, csv_error, other_separator, separator_error};
 pub use error::{CellRef, DataError, MAX_ECHO_CHARS, clip};
 
+/// What is wrong with a cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BadKind {
+    /// Empty, or NaN: how a logger writes a failed read ([`Missing`] decides).
+    Missing,
+    /// Text that is not a number.
+    NonNumeric,
+    /// An infinite number.
+    NonFinite,
+}
+
 #[derive(Clone, Debug)]
-struct BadCell {
+pub(crate) struct BadCell {
     row: usize,
     text: String,
-    non_finite: bool,
+    kind: BadKind,
+}
+
+/// Per column: its first bad cell, and its first bad cell that is not a missing value.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Bad {
+    first: Option<BadCell>,
+    other: Option<BadCell>,
+}
+
+impl Bad {
+    fn note(&mut self, cell: BadCell) {
+        if self.other.is_none() && cell.kind != BadKind::Missing {
+            self.other = Some(cell.clone());
+        }
+        if self.first.is_none() {
+            self.first = Some(cell);
+        }
+    }
 }
 
 /// A loaded measurement table: named f64 columns, the line of every row, and the first bad cell of
@@ -39,22 +79,49 @@ pub struct Dataset {
     names: Vec<String>,
     cols: Vec<Vec<f64>>,
     lines: Vec<u64>,
-    bad: Vec<Option<BadCell>>,
+    bad: Vec<Bad>,
+    notes: Vec<String>,
 }
 
 impl Dataset {
-    /// Loads a CSV file, gzip-decompressed when the name ends with `.gz`.
+    /// Loads a measurement file with the default [`LoadOptions`]: a CSV file (gzip-decompressed
+    /// when the name ends with `.gz`), or an autopilot log recognised by its first bytes.
     pub fn load(path: &Path) -> Result<Self, DataError> {
-        Self::load_with_progress(path, &Silent)
+        Self::load_with(path, &LoadOptions::default(), &Silent)
     }
 
     /// [`Dataset::load`], reporting the bytes of the file read so far to `progress`.
     pub fn load_with_progress(path: &Path, progress: &dyn Progress) -> Result<Self, DataError> {
+        Self::load_with(path, &LoadOptions::default(), progress)
+    }
+
+    /// Loads a measurement file for a command that uses `opts.columns`: for an autopilot log, the
+    /// message of the first of them gives the rows ([`log`]); then the policies of [`clean`]
+    /// (repeated time, missing cells) apply, their counts kept as [`Dataset::notes`].
+    pub fn load_with(
+        path: &Path,
+        opts: &LoadOptions,
+        progress: &dyn Progress,
+    ) -> Result<Self, DataError> {
         let file = path.display().to_string();
         let io = |source| DataError::Io {
             file: file.clone(),
             source,
         };
+        let mut f = std::fs::File::open(path).map_err(io)?;
+        let mut head = [0u8; 8];
+        let got = read_head(&mut f, &mut head).map_err(io)?;
+        let head = head.get(..got).unwrap_or(&[]);
+        if let Some(kind) = log::Kind::of(path, head) {
+            let bytes = std::fs::read(path).map_err(io)?;
+            let tables = match kind {
+                log::Kind::ULog => ulog::read(&file, &bytes)?,
+                log::Kind::DataFlash => dataflash::read(&file, &bytes)?,
+            };
+            let data = tables.dataset(&file, opts)?;
+            return clean::apply(data, opts);
+        }
+        drop(f);
         let f = std::fs::File::open(path).map_err(io)?;
         let size = f.metadata().map_or(0, |m| m.len());
         progress.start(&format!("loading {}", clip(&file)), size, Unit::Bytes);
@@ -66,7 +133,7 @@ impl Dataset {
             Self::from_reader(&file, counted)
         };
         progress.finish();
-        out
+        clean::apply(out?, opts)
     }
 
     /// Parses gzip-compressed CSV from any reader; `file` is the name used in errors.
@@ -106,7 +173,7 @@ impl Dataset {
         }
         check_duplicates(file, &names)?;
         let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
-        let mut bad: Vec<Option<BadCell>> = vec![None; names.len()];
+        let mut bad: Vec<Bad> = vec![Bad::default(); names.len()];
         let mut lines = Vec::new();
         let mut rec = csv::ByteRecord::new();
         loop {
@@ -136,11 +203,18 @@ impl Dataset {
                 let v = match parsed {
                     Some(v) if v.is_finite() => v,
                     other => {
-                        if bad.is_none() {
-                            *bad = Some(BadCell {
+                        let kind = match other {
+                            _ if field.is_empty() => BadKind::Missing,
+                            Some(v) if v.is_nan() => BadKind::Missing,
+                            Some(_) => BadKind::NonFinite,
+                            None => BadKind::NonNumeric,
+                        };
+                        if bad.first.is_none() || (bad.other.is_none() && kind != BadKind::Missing)
+                        {
+                            bad.note(BadCell {
                                 row,
                                 text: clip(&String::from_utf8_lossy(field)),
-                                non_finite: other.is_some(),
+                                kind,
                             });
                         }
                         f64::NAN
@@ -169,29 +243,66 @@ impl Dataset {
             cols,
             lines,
             bad,
+            notes: Vec::new(),
         })
     }
 
     /// A dataset from in-memory columns (rows numbered as if read from a file with a header).
     pub fn from_columns(file: &str, names: Vec<String>, cols: Vec<Vec<f64>>) -> Self {
         let n = cols.first().map_or(0, Vec::len);
-        let bad = cols
-            .iter()
-            .map(|c| {
-                c.iter().position(|v| !v.is_finite()).map(|row| BadCell {
-                    row,
-                    text: format!("{}", c.get(row).copied().unwrap_or(f64::NAN)),
-                    non_finite: true,
-                })
-            })
-            .collect();
+        Self::from_parts(file, names, cols, (2..n as u64 + 2).collect())
+    }
+
+    /// A dataset from in-memory columns and the file line (or log record) of each row; a cell that
+    /// is NaN is a missing value, an infinite one a bad cell.
+    pub(crate) fn from_parts(
+        file: &str,
+        names: Vec<String>,
+        cols: Vec<Vec<f64>>,
+        lines: Vec<u64>,
+    ) -> Self {
+        let bad = cols.iter().map(|c| Self::scan_bad(c)).collect();
         Self {
             file: file.to_string(),
             names,
             cols,
-            lines: (2..n as u64 + 2).collect(),
+            lines,
             bad,
+            notes: Vec::new(),
         }
+    }
+
+    /// The first missing (NaN) and first infinite cell of a column of numbers.
+    fn scan_bad(c: &[f64]) -> Bad {
+        let mut bad = Bad::default();
+        for (row, v) in c.iter().enumerate() {
+            if v.is_finite() {
+                continue;
+            }
+            let kind = if v.is_nan() {
+                BadKind::Missing
+            } else {
+                BadKind::NonFinite
+            };
+            if bad.first.is_some() && (bad.other.is_some() || kind == BadKind::Missing) {
+                continue;
+            }
+            bad.note(BadCell {
+                row,
+                text: format!("{v}"),
+                kind,
+            });
+            if bad.other.is_some() {
+                break;
+            }
+        }
+        bad
+    }
+
+    /// What the loading policies did to the file (rows averaged, dropped, clock restarts), one
+    /// sentence each; empty for a clean file.
+    pub fn notes(&self) -> &[String] {
+        &self.notes
     }
 
     /// The file name used in messages.
@@ -245,13 +356,25 @@ impl Dataset {
     /// A column's values; an error if it is missing or holds a non-numeric or non-finite cell.
     pub fn column(&self, name: &str) -> Result<&[f64], DataError> {
         let i = self.index(name)?;
-        if let Some(Some(b)) = self.bad.get(i) {
+        // Text or infinity is an error under every policy, so it is said first.
+        if let Some(b) = self
+            .bad
+            .get(i)
+            .and_then(|b| b.other.as_ref().or(b.first.as_ref()))
+        {
             let at = self.cell(b.row, i);
             let text = b.text.clone();
-            return Err(if b.non_finite {
-                DataError::NonFinite { at, text }
-            } else {
-                DataError::NonNumeric { at, text }
+            return Err(match b.kind {
+                BadKind::NonFinite => DataError::NonFinite { at, text },
+                BadKind::NonNumeric => DataError::NonNumeric { at, text },
+                BadKind::Missing => DataError::Missing {
+                    at,
+                    text: if text.is_empty() {
+                        "an empty cell".into()
+                    } else {
+                        format!("`{text}`")
+                    },
+                },
             });
         }
         Ok(self.cols.get(i).map_or(&[][..], Vec::as_slice))
@@ -323,27 +446,49 @@ impl Dataset {
                 window()
             )));
         }
+        let mut out = self.keep_rows(&keep);
+        out.file = format!("{} [{lo} s, {hi} s)", self.file);
+        Ok(out)
+    }
+
+    /// The rows `keep` (ascending indices), with their lines, bad cells and notes.
+    pub(crate) fn keep_rows(&self, keep: &[usize]) -> Self {
         let pick = |v: &Vec<f64>| keep.iter().filter_map(|&i| v.get(i).copied()).collect();
+        let remap = |b: &Option<BadCell>| {
+            b.as_ref().and_then(|b| {
+                keep.binary_search(&b.row).ok().map(|row| BadCell {
+                    row,
+                    text: b.text.clone(),
+                    kind: b.kind,
+                })
+            })
+        };
+        let cols: Vec<Vec<f64>> = self.cols.iter().map(pick).collect();
         let bad = self
             .bad
             .iter()
-            .map(|b| {
-                b.as_ref().and_then(|b| {
-                    keep.iter().position(|&i| i == b.row).map(|row| BadCell {
-                        row,
-                        text: b.text.clone(),
-                        non_finite: b.non_finite,
-                    })
-                })
+            .zip(&cols)
+            .map(|(b, c)| {
+                let kept = Bad {
+                    first: remap(&b.first),
+                    other: remap(&b.other),
+                };
+                // A bad cell whose row went leaves its later ones unnamed: find them again.
+                if kept.first.is_none() && c.iter().any(|v| !v.is_finite()) {
+                    Self::scan_bad(c)
+                } else {
+                    kept
+                }
             })
             .collect();
-        Ok(Self {
-            file: format!("{} [{lo} s, {hi} s)", self.file),
+        Self {
+            file: self.file.clone(),
             names: self.names.clone(),
-            cols: self.cols.iter().map(pick).collect(),
+            cols,
             lines: keep.iter().map(|&i| self.line(i)).collect(),
             bad,
-        })
+            notes: self.notes.clone(),
+        }
     }
 }
 
@@ -389,4 +534,18 @@ pub fn median_step(time: &[f64]) -> f64 {
     let mut steps: Vec<f64> = time.windows(2).map(|w| w[1] - w[0]).collect();
     let mid = steps.len() / 2;
     *steps.select_nth_unstable_by(mid, f64::total_cmp).1
+}
+
+/// Reads up to `buf.len()` bytes from the start of a file (fewer at its end); the count read.
+fn read_head(f: &mut std::fs::File, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match f.read(buf.get_mut(got..).unwrap_or(&mut [])) {
+            Ok(0) => break,
+            Ok(n) => got += n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
 }

@@ -48,6 +48,30 @@ pub enum TrainError {
     /// No feature was given.
     #[error("no features: give at least one --feature EXPR")]
     NoFeatures,
+    /// A unit given (`--unit`, a board description's `unit`) does not parse.
+    #[error("{option}: {source}")]
+    Unit {
+        /// Where the unit was given (the option or key).
+        option: String,
+        /// What is wrong.
+        #[source]
+        source: crate::units::UnitError,
+    },
+    /// A model's unit and a channel's are one quantity at another scale: flying one as the other
+    /// would be off by the factor.
+    #[error(
+        "{file}: the model is in {model}, the channel in {board}: one {model} is {factor} {board},          so the model would be off by that factor; fit it with the target in {board} (scale the          target column by {factor}) and --unit {board}"
+    )]
+    UnitScale {
+        /// The blob.
+        file: String,
+        /// The model's unit.
+        model: String,
+        /// The channel's unit.
+        board: String,
+        /// One model unit in channel units.
+        factor: String,
+    },
     /// The expressions parse but do not make a program (too many nodes, an unknown name, …).
     #[error("feature program: {source}")]
     Program {

@@ -71,6 +71,10 @@ pub struct FitOptions {
     pub until: Option<f64>,
     /// The most memory the fit may take (bytes, estimated before allocating; see [`crate::budget`]).
     pub memory_budget: u64,
+    /// Rows of a repeated or backward time (`--repeated-time`, [`crate::dataset::clean`]).
+    pub repeated_time: crate::dataset::RepeatedTime,
+    /// Empty or NaN cells in used columns (`--missing`).
+    pub missing: crate::dataset::Missing,
 }
 
 impl FitOptions {
@@ -101,6 +105,25 @@ impl FitOptions {
             from: None,
             until: None,
             memory_budget: crate::budget::DEFAULT_BUDGET_BYTES,
+            repeated_time: crate::dataset::RepeatedTime::default(),
+            missing: crate::dataset::Missing::default(),
+        }
+    }
+
+    /// How to load the training file: the columns the fit uses (target first, so that in an
+    /// autopilot log the target's message gives the rows; then the reference and the program's
+    /// inputs) and the policies for messy rows.
+    pub fn load_options(&self) -> crate::dataset::LoadOptions {
+        let mut columns = vec![self.target.clone()];
+        columns.extend(self.reference.clone());
+        if let Ok(p) = self.spec.program() {
+            columns.extend(p.inputs.iter().map(|s| s.to_string()));
+        }
+        crate::dataset::LoadOptions {
+            time: Some(self.time.clone()),
+            columns,
+            repeated_time: self.repeated_time,
+            missing: self.missing,
         }
     }
 
@@ -125,6 +148,12 @@ impl FitOptions {
     /// The reference, the window and the gap threshold.
     fn set_run(&mut self, run: &RunOptions) -> Result<(), TrainError> {
         self.reference.clone_from(&run.reference);
+        if let Some(r) = run.repeated_time {
+            self.repeated_time = r;
+        }
+        if let Some(m) = run.missing {
+            self.missing = m;
+        }
         if let Some(v) = run.reference_value {
             self.reference_value = Some(options::REFERENCE_VALUE.check(v)?);
         }
@@ -196,6 +225,13 @@ impl FitOptions {
             self.axis.clone_from(a);
         }
         if let Some(u) = &c.unit {
+            // Parsed, so that a typo is said here rather than at `tcomp image`.
+            if !u.is_empty() {
+                crate::units::parse(u).map_err(|source| TrainError::Unit {
+                    option: "--unit (spec key `unit`)".into(),
+                    source,
+                })?;
+            }
             self.unit.clone_from(u);
         }
         Ok(())

@@ -17,6 +17,7 @@
 //! println!("{}", fitted.summary.train.residual_std);
 //! ```
 
+pub mod autopilot;
 pub mod bayes;
 pub mod blob_io;
 pub mod budget;
@@ -42,6 +43,7 @@ pub mod rows;
 pub mod spec;
 pub mod stream;
 pub mod train;
+pub mod units;
 
 pub use dataset::{DataError, Dataset};
 pub use error::TrainError;

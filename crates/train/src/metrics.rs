@@ -275,6 +275,10 @@ pub struct EvalReport {
     pub gaps: usize,
     /// Gaps that restarted the feature state (longer than 5× the program's longest time constant).
     pub gaps_restarted: usize,
+    /// What the loading policies did to the file ([`crate::Dataset::notes`]); printed as notes,
+    /// not part of the JSON figures.
+    #[serde(skip)]
+    pub notes: Vec<String>,
 }
 
 /// Computes the report of a run with bins of `bin_s` seconds, by feeding its rows in order to the

@@ -83,7 +83,7 @@ struct Selection {
 /// Restricts `data` to the window and computes the error (target − reference); with no reference
 /// at all, the training mean of the target is used (and said).
 fn select(data: &Dataset, opts: &FitOptions) -> Result<Selection, TrainError> {
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<String> = data.notes().to_vec();
     let data = if opts.from.is_some() || opts.until.is_some() {
         data.select_time(
             &opts.time,
@@ -100,6 +100,17 @@ fn select(data: &Dataset, opts: &FitOptions) -> Result<Selection, TrainError> {
         (None, Some(v)) => Some(v),
         (None, None) => {
             let m = target.iter().sum::<f64>() / target.len().max(1) as f64;
+            if !m.is_finite() {
+                // A value the data gave, not an option the user gave: said as itself.
+                return Err(DataError::Derived {
+                    file: data.file().to_string(),
+                    what: format!(
+                        "the training mean of `{}` is not finite (its cells sum past the largest                          number, e.g. cells near 1e308): with no reference given it would be the                          reference; give --reference COL or --reference-value X",
+                        crate::dataset::clip(&opts.target)
+                    ),
+                }
+                .into());
+            }
             warnings.push(format!(
                 "no reference given: errors are taken against the training mean of `{}` ({m})",
                 opts.target

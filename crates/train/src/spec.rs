@@ -27,6 +27,19 @@ use crate::options::{
 use serde::Deserialize;
 use std::path::Path;
 
+impl RunOptions {
+    /// How a command reads its run: `time` the time column, `columns` those it uses (target
+    /// first), with these policies.
+    pub fn load_options(&self, time: &str, columns: Vec<String>) -> crate::dataset::LoadOptions {
+        crate::dataset::LoadOptions {
+            time: Some(time.to_string()),
+            columns,
+            repeated_time: self.repeated_time.unwrap_or_default(),
+            missing: self.missing.unwrap_or_default(),
+        }
+    }
+}
+
 crate::layer! {
     /// Which rows of a run are read and against what reference: shared by every command that
     /// reads a run (`fit`, `eval`, `diagnose`, `compare`, `report`), and keys of the fit spec.
@@ -55,6 +68,16 @@ crate::layer! {
         /// here [default: the first row read].
         #[arg(long, allow_negative_numbers = true, value_parser = POWER_ON.parser())]
         pub power_on: Option<f64>,
+        /// Rows whose time repeats the previous row's: `average` them into one [default],
+        /// `drop` all but the first, or `refuse` the file. With average or drop, time stepping
+        /// back by more than 10 median steps is a clock restart: the rows from there continue
+        /// after a gap.
+        #[arg(long, value_enum)]
+        pub repeated_time: Option<crate::dataset::RepeatedTime>,
+        /// Empty or NaN cells in a column the model uses: `dropout` drops the row, a logger
+        /// dropout the feature state is carried across [default]; `refuse` the file.
+        #[arg(long, value_enum)]
+        pub missing: Option<crate::dataset::Missing>,
     }
 }
 

@@ -47,6 +47,27 @@ pub struct StreamOptions {
     pub from: Option<f64>,
     /// `--until`: time (s) where the window ends, exclusive.
     pub until: Option<f64>,
+    /// `--repeated-time`: a record whose time repeats or goes back is read in memory under it.
+    pub repeated_time: crate::dataset::RepeatedTime,
+    /// `--missing`: a record with an empty or NaN cell is read in memory under it.
+    pub missing: crate::dataset::Missing,
+}
+
+impl StreamOptions {
+    /// How the in-memory path loads the file for `model`: its time column, the columns it uses
+    /// (target first), and the policies.
+    fn load_options(&self, model: &HostModel<'_>) -> crate::dataset::LoadOptions {
+        let mut columns = vec![self.roles.target.clone()];
+        columns.extend(self.roles.reference.clone());
+        columns.extend(model.program.inputs.iter().map(|s| s.to_string()));
+        columns.extend(self.temperature.clone());
+        crate::dataset::LoadOptions {
+            time: Some(self.roles.time.clone()),
+            columns,
+            repeated_time: self.repeated_time,
+            missing: self.missing,
+        }
+    }
 }
 
 /// Evaluates `model` on the CSV (or `.csv.gz`) file at `path`, streaming; the same report as
@@ -62,6 +83,13 @@ pub fn eval_stream(
         file: file.clone(),
         source,
     })?;
+    let mut head = [0u8; 8];
+    let got = std::io::Read::read(&mut &f, &mut head).unwrap_or(0);
+    if crate::dataset::log::Kind::of(path, head.get(..got).unwrap_or(&[])).is_some() {
+        // A binary log is compact and read whole: the in-memory path.
+        let data = Dataset::load_with(path, &opts.load_options(model), &crate::progress::Silent)?;
+        return evaluate_window(data, model, opts);
+    }
     let gz = path.extension().is_some_and(|e| e == "gz");
     eval_stream_reader(&file, f, gz, model, opts)
 }
@@ -279,11 +307,22 @@ fn in_memory<R: Read>(
     opts: &StreamOptions,
 ) -> Result<EvalReport, TrainError> {
     let reader = std::io::BufReader::new(reader);
-    let mut data = if gz {
+    let data = if gz {
         Dataset::from_gz_reader(file, reader)?
     } else {
         Dataset::from_reader(file, reader)?
     };
+    let data = crate::dataset::clean::apply(data, &opts.load_options(model))?;
+    evaluate_window(data, model, opts)
+}
+
+/// Selects the window of `data` and evaluates `model` on it, the notes of the loading kept.
+fn evaluate_window(
+    mut data: Dataset,
+    model: &HostModel<'_>,
+    opts: &StreamOptions,
+) -> Result<EvalReport, TrainError> {
+    let notes = data.notes().to_vec();
     if opts.from.is_some() || opts.until.is_some() {
         data = data.select_time(
             &opts.roles.time,
@@ -291,12 +330,14 @@ fn in_memory<R: Read>(
             opts.until.unwrap_or(f64::INFINITY),
         )?;
     }
-    crate::evaluate(
+    let mut report = crate::evaluate(
         model,
         &data,
         &opts.roles,
         opts.bin_s,
         opts.temperature.as_deref(),
         opts.gap_s,
-    )
+    )?;
+    report.notes = notes;
+    Ok(report)
 }

@@ -10,6 +10,15 @@ fn write(dir: &tempfile::TempDir, name: &str, text: &str) -> std::path::PathBuf 
     p
 }
 
+/// Loads with `--repeated-time refuse`: the file as written, its time checked by `time`.
+fn refusing(p: &std::path::Path) -> Dataset {
+    let opts = tcomp_train::dataset::LoadOptions {
+        repeated_time: tcomp_train::dataset::RepeatedTime::Refuse,
+        ..Default::default()
+    };
+    Dataset::load_with(p, &opts, &tcomp_train::progress::Silent).unwrap()
+}
+
 fn good_csv(rows: usize) -> String {
     let mut s = String::from("time_s,t_coil_c,gyro_dph\n");
     for i in 0..rows {
@@ -55,7 +64,7 @@ fn nan_cell_is_rejected_with_position() {
     let d = Dataset::load(&p).unwrap();
     let e = d.column("t_coil_c").unwrap_err().to_string();
     assert!(e.contains("nan.csv:8:2"), "{e}");
-    assert!(e.contains("not finite"), "{e}");
+    assert!(e.contains("missing value (`NaN`)"), "{e}");
 }
 
 #[test]
@@ -64,20 +73,12 @@ fn non_monotonic_and_duplicate_time() {
     let mut lines: Vec<String> = good_csv(10).lines().map(str::to_string).collect();
     lines[5] = "3,20,0.2".into(); // line 6 repeats time 3 of line 5
     let p = write(&dir, "dup.csv", &(lines.join("\n") + "\n"));
-    let e = Dataset::load(&p)
-        .unwrap()
-        .time("time_s")
-        .unwrap_err()
-        .to_string();
+    let e = refusing(&p).time("time_s").unwrap_err().to_string();
     assert!(e.contains("dup.csv:6:1"), "{e}");
     assert!(e.contains("equal to"), "{e}");
     lines[5] = "1.5,20,0.2".into();
     let p = write(&dir, "back.csv", &(lines.join("\n") + "\n"));
-    let e = Dataset::load(&p)
-        .unwrap()
-        .time("time_s")
-        .unwrap_err()
-        .to_string();
+    let e = refusing(&p).time("time_s").unwrap_err().to_string();
     assert!(e.contains("back.csv:6:1") && e.contains("before"), "{e}");
 }
 

@@ -320,7 +320,7 @@ fn one(
     settings: Settings,
     dir: &Path,
 ) -> anyhow::Result<UnitRow> {
-    let data = UnitData::load(&e.source)?;
+    let data = UnitData::load(&e.source, plans)?;
     let u = unit::run(plans, data, e.serial, board, settings, &|| {})
         .with_context(|| format!("unit {}", e.name))?;
     let udir = dir.join(&e.name);

@@ -29,22 +29,38 @@ pub struct UnitData {
 }
 
 impl UnitData {
-    /// Loads the data of `source`.
-    pub fn load(source: &DataSource) -> anyhow::Result<Self> {
+    /// Loads the data of `source` for the channels of `plans`: the columns they use (the first
+    /// channel's target first, so that in an autopilot log its message gives the rows) and the
+    /// first channel's policies for messy rows.
+    pub fn load(source: &DataSource, plans: &[super::spec::ChannelPlan]) -> anyhow::Result<Self> {
+        let mut opts = tcomp_train::dataset::LoadOptions::default();
+        for (k, plan) in plans.iter().enumerate() {
+            let Ok(fit) = tcomp_train::FitOptions::from_spec(&plan.spec) else {
+                continue;
+            };
+            let lo = fit.load_options();
+            if k == 0 {
+                opts = lo;
+            } else {
+                opts.columns.extend(lo.columns);
+            }
+        }
+        let load =
+            |p: &std::path::Path| Dataset::load_with(p, &opts, &tcomp_train::progress::Silent);
         Ok(match source {
             DataSource::Split { log, split_s } => Self {
                 train_file: log.clone(),
                 verify_file: None,
                 split_s: Some(*split_s),
-                main: Dataset::load(log)?,
+                main: load(log)?,
                 verify: None,
             },
             DataSource::Pair { train, verify } => Self {
                 train_file: train.clone(),
                 verify_file: Some(verify.clone()),
                 split_s: None,
-                main: Dataset::load(train)?,
-                verify: Some(Dataset::load(verify)?),
+                main: load(train)?,
+                verify: Some(load(verify)?),
             },
         })
     }

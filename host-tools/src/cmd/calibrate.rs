@@ -98,7 +98,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
         None => (spec.source_in(&spec.base)?, spec.serial),
     };
-    let data = UnitData::load(&source)?;
+    let data = UnitData::load(&source, &plans)?;
     let mut inputs: Vec<(&str, &std::path::Path)> = vec![("SPEC", args.spec.as_path())];
     inputs.push(("[data]", data.train_file.as_path()));
     let outputs: Vec<PathBuf> = ["summary.json", "report.html", "image.bin"]

@@ -97,9 +97,12 @@ pub fn target_and_unit(path: &Path, run: &RunArgs) -> anyhow::Result<(String, St
 pub fn run(args: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.bin > 0.0, "--bin must be positive");
     args.run.check_window()?;
-    let (time, first) = time_and_first_input(&args.model_a)?;
+    let (_, first) = time_and_first_input(&args.model_a)?;
     let progress = super::progress::spinner(args.quiet, "loading data");
-    let data = args.run.load(&time)?;
+    let bytes_a = tcomp_train::blob_io::read(&args.model_a)?;
+    let model_a = tcomp_train::blob_io::decode(&args.model_a, &bytes_a)?;
+    let data = args.run.load(&model_a, args.quiet || args.json)?;
+    drop(model_a);
     progress.set_message("running both models");
     let temp = args.temperature.clone().or(first);
     let ra = run_blob(&args.model_a, &data, temp.as_deref(), &args.run)?;

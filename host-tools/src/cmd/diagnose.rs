@@ -76,9 +76,14 @@ fn prepare(args: &Args) -> anyhow::Result<Prepared> {
     let model = tcomp_train::blob_io::decode(&args.model, &bytes)?;
     let roles = args.run.roles(&model);
     let window = args.run.model_window(&model);
+    let quiet = args.quiet || args.json;
+    let mut data = args.run.load(&model, quiet)?;
+    let mut verify = args
+        .verify
+        .as_deref()
+        .map(|p| args.run.load_other(p, &model, quiet))
+        .transpose()?;
     drop(model);
-    let mut data = args.run.load(&roles.time)?;
-    let mut verify = args.verify.as_deref().map(Dataset::load).transpose()?;
     // The model's own training window (from its blob) when --data is its training file and no
     // --from/--until says otherwise: diagnosing held-out rows as training data finds nothing.
     if let Some([lo, hi]) = window {

@@ -47,6 +47,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             .stream(roles.clone(), args.bin, args.temperature.clone()),
     )?;
     progress.finish_and_clear();
+    if !args.quiet && !args.json {
+        for n in &report.notes {
+            eprintln!("note: {n}");
+        }
+    }
     let subject = Subject::new(
         vec![args.model.display().to_string()],
         &roles.target,

@@ -36,7 +36,8 @@ pub struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
-    /// No progress display.
+    /// Quiet: no progress display, no summary and no warnings (errors only; the model is still
+    /// written, and `--json` still prints).
     #[arg(long)]
     pub quiet: bool,
 }
@@ -62,7 +63,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     let opts = FitOptions::from_spec(&file_spec.merged(flags))?;
     let progress = super::progress::Bar::new(args.quiet);
-    let data = Dataset::load_with_progress(data_path, &progress)?;
+    let data = Dataset::load_with(data_path, &opts.load_options(), &progress)?;
     let fitted = tcomp_train::fit_with_progress(&data, &opts, &progress)?;
     let bytes = fitted.model.to_bytes()?;
     tcomp_train::blob_io::write_atomic(&args.out, &bytes)
@@ -85,7 +86,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             );
         }
         json::print("fit", &subject, &body)?;
-    } else {
+    } else if !args.quiet {
         for w in &s.warnings {
             eprintln!("warning: {w}");
         }

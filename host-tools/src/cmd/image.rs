@@ -129,6 +129,7 @@ fn provenance_of(trained_on: &str) -> (String, u64, [f32; 2]) {
 
 /// One channel's blob for [`build`]: the board's channel id, the file it was read from (named in
 /// errors and in the provenance) and how errors name it (`--model 0=gx.tcm`, `channel gyro_x`).
+#[derive(Clone, Debug)]
 pub struct ChannelBlob {
     /// Channel id in the board description.
     pub id: u16,
@@ -214,6 +215,23 @@ fn check_blob(blob: &ChannelBlob, board: &Board, done: &[Loaded]) -> anyhow::Res
     })
 }
 
+/// `blobs` with each unit compared with its channel's by [`tcomp_train::units`], not as text.
+fn respell_units(board: &Board, blobs: &[ChannelBlob]) -> anyhow::Result<Vec<ChannelBlob>> {
+    let rows = board.channel_rows();
+    blobs
+        .iter()
+        .map(|b| {
+            let mut b = b.clone();
+            if let Some(row) = rows.iter().find(|r| r.id == b.id)
+                && let Some(bytes) = tcomp_train::units::respell_blob(&b.path, &b.bytes, row.unit)?
+            {
+                b.bytes = bytes;
+            }
+            Ok(b)
+        })
+        .collect()
+}
+
 /// The image of one unit: `blobs` checked against `board` (an unknown or repeated channel, a model
 /// for another sensor kind, unit or axis, an input the channel's thermometers cannot supply, a blob
 /// the firmware would not load, an image larger than the `MODELS` region are all refused) and laid
@@ -228,6 +246,10 @@ pub fn build(
     if blobs.len() > MAX_ENTRIES {
         bail!("at most {MAX_ENTRIES} models fit the image table");
     }
+    // A model whose unit is the channel's spelt another way (`m/s2` for `m/s^2`) flies in the
+    // channel's spelling; a scaled one (`deg/s` for `rad/s`) is refused with the factor.
+    let respelled = respell_units(board, blobs)?;
+    let blobs = respelled.as_slice();
     let mut loaded: Vec<Loaded> = Vec::new();
     for b in blobs {
         let l = check_blob(b, board, &loaded)?;

@@ -17,6 +17,7 @@ macro_rules! out {
     };
 }
 
+pub mod autopilot;
 pub mod calibrate;
 mod check;
 pub mod compare;

@@ -121,9 +121,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let bytes = tcomp_train::blob_io::read(first)?;
     let m0 = tcomp_train::blob_io::decode(first, &bytes)?;
     let temp = m0.program.inputs.first().map(|s| s.to_string());
-    let data = args.run.load(m0.meta.columns.time)?;
+    let data = args.run.load(&m0, args.quiet)?;
     let analysis = diagnose(args, first, temp.as_deref())?;
-    let verify = args.verify.as_deref().map(Dataset::load).transpose()?;
+    let verify = args
+        .verify
+        .as_deref()
+        .map(|p| args.run.load_other(p, &m0, args.quiet))
+        .transpose()?;
     let (shown, plotted) = match (&verify, &args.verify) {
         (Some(v), Some(p)) => (v, format!("held-out run {}", p.display())),
         _ => (&data, format!("run {}", data_path.display())),

@@ -81,11 +81,20 @@ impl RunArgs {
             .filter(|_| same(std::path::Path::new(&t.file), &self.data))
     }
 
-    /// Loads `--data` and keeps the rows of the window (time column `time`); at least two rows
-    /// must remain, since one row has no spread and every figure would be a meaningless zero.
-    pub fn load(&self, time: &str) -> anyhow::Result<Dataset> {
+    /// Loads `--data` for `model` ([`Self::load_options`]), says what the loading policies did
+    /// (on stderr, unless `quiet`) and keeps the rows of the window; at least two rows must
+    /// remain, since one row has no spread and every figure would be a meaningless zero.
+    pub fn load(&self, model: &HostModel<'_>, quiet: bool) -> anyhow::Result<Dataset> {
         self.check_window()?;
-        let mut data = Dataset::load(&self.data)?;
+        let opts = self.load_options(model);
+        let time = opts.time().to_string();
+        let time = time.as_str();
+        let mut data = Dataset::load_with(&self.data, &opts, &tcomp_train::progress::Silent)?;
+        if !quiet {
+            for n in data.notes() {
+                eprintln!("note: {n}");
+            }
+        }
         let windowed = self.run.from.is_some() || self.run.until.is_some();
         if windowed {
             data = data.select_time(
@@ -109,6 +118,27 @@ impl RunArgs {
         Ok(data)
     }
 
+    /// Loads another run of `model` (`--verify`) with this run's policies, saying what they did
+    /// unless `quiet`.
+    pub fn load_other(
+        &self,
+        path: &std::path::Path,
+        model: &HostModel<'_>,
+        quiet: bool,
+    ) -> anyhow::Result<Dataset> {
+        let data = Dataset::load_with(
+            path,
+            &self.load_options(model),
+            &tcomp_train::progress::Silent,
+        )?;
+        if !quiet {
+            for n in data.notes() {
+                eprintln!("note: {n}");
+            }
+        }
+        Ok(data)
+    }
+
     /// The options of a streamed evaluation of `--data` ([`tcomp_train::eval_stream`]) with
     /// these roles, bins of `bin_s` seconds and the segment temperature column.
     pub fn stream(
@@ -124,6 +154,18 @@ impl RunArgs {
             gap_s: self.run.gap,
             from: self.run.from,
             until: self.run.until,
+            repeated_time: self.run.repeated_time.unwrap_or_default(),
+            missing: self.run.missing.unwrap_or_default(),
         }
+    }
+
+    /// How `model`'s run is loaded: its time column, the columns it uses (target first) and this
+    /// run's policies for messy rows.
+    pub fn load_options(&self, model: &HostModel<'_>) -> tcomp_train::dataset::LoadOptions {
+        let roles = self.roles(model);
+        let mut columns = vec![roles.target.clone()];
+        columns.extend(roles.reference.clone());
+        columns.extend(model.program.inputs.iter().map(|s| s.to_string()));
+        self.run.load_options(&roles.time, columns)
     }
 }

@@ -73,8 +73,42 @@ pub enum DataError {
         /// The cell text.
         text: String,
     },
+    /// A cell of a used column is empty or NaN, and `--missing refuse` was given.
+    #[error("{}: missing value ({text}) in a column the model uses (`--missing dropout`, the default, drops such rows as logger dropouts)", .at)]
+    Missing {
+        /// Where.
+        at: CellRef,
+        /// "an empty cell" or the cell text quoted.
+        text: String,
+    },
+    /// An autopilot log is damaged or not what its name says, at a byte offset.
+    #[error("{file}: byte {offset}: {what}")]
+    Log {
+        /// File name.
+        file: String,
+        /// Byte offset of the record (0 for the file's start).
+        offset: u64,
+        /// What is wrong, in words.
+        what: String,
+    },
+    /// An autopilot log holds no message with the column asked for.
+    #[error("{file}: {what}")]
+    LogColumn {
+        /// File name.
+        file: String,
+        /// What is missing, with the messages the log has.
+        what: String,
+    },
+    /// A value derived from the data (not given by the user) is not finite.
+    #[error("{file}: {what}")]
+    Derived {
+        /// File name.
+        file: String,
+        /// The value, named as itself (e.g. "the training mean of `y` is not finite").
+        what: String,
+    },
     /// Time does not strictly increase.
-    #[error("{}: time {value} s is {} the previous sample's {prev} s (time must strictly increase)", .at, if .value == .prev { "equal to" } else { "before" })]
+    #[error("{}: time {value} s is {} the previous sample's {prev} s (time must strictly increase with `--repeated-time refuse`; `average`, the default, or `drop` handle repeated and backward time)", .at, if .value == .prev { "equal to" } else { "before" })]
     TimeNotIncreasing {
         /// Where.
         at: CellRef,

@@ -259,6 +259,7 @@ impl Accumulator {
             input_faults: flags.faults,
             gaps: flags.gaps,
             gaps_restarted: flags.restarted,
+            notes: Vec::new(),
         }
     }
 }

@@ -39,6 +39,7 @@ pub(super) fn report(run: &Run, bin_s: f64) -> EvalReport {
         input_faults: run.faults,
         gaps: run.gaps,
         gaps_restarted: run.restarted.len(),
+        notes: Vec::new(),
     }
 }
 

@@ -1,0 +1,525 @@
+//! The autopilots' own thermal calibrations, computed from a log exactly as their tools compute
+//! them, so that a PX4 or ArduPilot user gets the parameter file their firmware flies — and can see
+//! beside it what that cubic leaves behind.
+//!
+//! PX4 (`Tools/process_sensor_caldata.py`): per `sensor_gyro`/`sensor_accel` instance k, `TMIN`
+//! and `TMAX` the extreme temperatures, `TREF` their midpoint, each axis median-filtered (31
+//! samples, zero-padded as `scipy.signal.medfilt`), the accelerometer's axis less its median, then
+//! averaged into 2000 bins of temperature (`resampleWithDeltaX`) and fitted with a cubic in
+//! `T − TREF` (`numpy.polyfit`); parameters `TC_Gk_X{0..3}_{axis}` / `TC_Ak_…` and the device id.
+//! Temperatures and their differences are single precision, as the tool's numpy float32 arrays.
+//!
+//! ArduPilot (`Tools/scripts/tempcal_IMU.py`, the cubic version): per `IMU` instance, a 2 s moving
+//! average of every column, `TMIN`/`TMAX` of the averaged temperature, a cubic in `T − 35` fitted
+//! to the gyro and to the accelerometer less its mean; parameters `INS_TCALn_{ACC,GYR}{1..3}_{X,Y,Z}`
+//! are the coefficients of `(T−35)^p`, p = 1..3, times 1e6 (the constant is dropped: the
+//! offsets calibration owns it). Not handled: a log whose `AHRS_ORIENTATION` is not 0 or whose
+//! IMU already flew a temperature calibration (the tool rotates and subtracts those first).
+
+use nalgebra::{DMatrix, DVector};
+
+/// The least-squares polynomial of degree `deg` through `(x, y)`, highest power first, as
+/// `numpy.polyfit` (columns of the Vandermonde matrix scaled to unit norm, then solved by SVD).
+pub fn polyfit(x: &[f64], y: &[f64], deg: usize) -> Option<Vec<f64>> {
+    let n = x.len().min(y.len());
+    if n <= deg {
+        return None;
+    }
+    let mut a = DMatrix::<f64>::zeros(n, deg + 1);
+    for (i, &xi) in x.iter().take(n).enumerate() {
+        for j in 0..=deg {
+            a[(i, j)] = xi.powi((deg - j) as i32);
+        }
+    }
+    let scale: Vec<f64> = (0..=deg)
+        .map(|j| a.column(j).norm())
+        .map(|s| if s == 0.0 { 1.0 } else { s })
+        .collect();
+    for (j, s) in scale.iter().enumerate() {
+        a.column_mut(j).scale_mut(1.0 / s);
+    }
+    let b = DVector::from_iterator(n, y.iter().take(n).copied());
+    let svd = a.svd(true, true);
+    let c = svd.solve(&b, 1e-15 * n as f64).ok()?;
+    Some(c.iter().zip(&scale).map(|(c, s)| c / s).collect())
+}
+
+/// `scipy.signal.medfilt(v, k)`: the median of each window of `k` (odd) samples, zeros beyond
+/// the ends.
+pub fn medfilt(v: &[f32], k: usize) -> Vec<f32> {
+    let h = k / 2;
+    let mut win = Vec::with_capacity(k);
+    (0..v.len())
+        .map(|i| {
+            win.clear();
+            for j in 0..k {
+                let at = (i + j).checked_sub(h);
+                win.push(at.and_then(|a| v.get(a)).copied().unwrap_or(0.0));
+            }
+            win.sort_by(f32::total_cmp);
+            win.get(h).copied().unwrap_or(0.0)
+        })
+        .collect()
+}
+
+/// `numpy.median` of single-precision values (the mean of the middle two of an even count, in
+/// single precision).
+fn median32(v: &[f32]) -> f32 {
+    let mut s = v.to_vec();
+    s.sort_by(f32::total_cmp);
+    let n = s.len();
+    match n {
+        0 => f32::NAN,
+        _ if n % 2 == 1 => s.get(n / 2).copied().unwrap_or(f32::NAN),
+        _ => {
+            let (a, b) = (s.get(n / 2 - 1).copied(), s.get(n / 2).copied());
+            match (a, b) {
+                (Some(a), Some(b)) => (a + b) / 2.0,
+                _ => f32::NAN,
+            }
+        }
+    }
+}
+
+/// PX4's `resampleWithDeltaX`: the mean x and y of each of 2000 equal bins of x that holds data.
+fn resample(x: &[f32], y: &[f32]) -> (Vec<f64>, Vec<f64>) {
+    const BINS: usize = 2000;
+    let lo = x.iter().copied().fold(f32::INFINITY, f32::min);
+    let hi = x.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let interval = (hi - lo) / BINS as f32;
+    let (mut sx, mut sy, mut count) = (vec![0.0f64; BINS], vec![0.0f64; BINS], vec![0u32; BINS]);
+    for (&xi, &yi) in x.iter().zip(y) {
+        let bin = if xi < lo {
+            0
+        } else if xi < hi {
+            (((xi - lo) / interval) as usize).min(BINS - 1)
+        } else {
+            BINS - 1
+        };
+        if let (Some(a), Some(b), Some(c)) = (sx.get_mut(bin), sy.get_mut(bin), count.get_mut(bin))
+        {
+            *a += f64::from(xi);
+            *b += f64::from(yi);
+            *c += 1;
+        }
+    }
+    let mut out = (Vec::new(), Vec::new());
+    for ((a, b), c) in sx.iter().zip(&sy).zip(&count) {
+        if *c > 0 {
+            out.0.push(a / f64::from(*c));
+            out.1.push(b / f64::from(*c));
+        }
+    }
+    out
+}
+
+/// One PX4 sensor instance's thermal compensation.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Px4Sensor {
+    /// `G` (gyro) or `A` (accelerometer).
+    pub kind: char,
+    /// The instance (the topic's multi id).
+    pub instance: u8,
+    /// `TC_xk_ID`: the median device id.
+    pub device_id: i64,
+    /// `TMIN`, `TMAX`, `TREF` (°C, single precision as the tool's).
+    pub tmin: f32,
+    /// See `tmin`.
+    pub tmax: f32,
+    /// See `tmin`.
+    pub tref: f32,
+    /// `X0..X3` per axis (x, y, z): `coef[axis][p]` multiplies `(T − TREF)^p`.
+    pub coef: [[f64; 4]; 3],
+}
+
+/// PX4's fit of one instance: `kind` `G` or `A`, temperatures, device ids and the three axes.
+pub fn px4_fit(
+    kind: char,
+    instance: u8,
+    temperature: &[f32],
+    device_id: &[f64],
+    axes: [&[f32]; 3],
+) -> Option<Px4Sensor> {
+    if temperature.first().is_none_or(|t| t.is_nan()) {
+        return None;
+    }
+    let tmin = temperature.iter().copied().fold(f32::INFINITY, f32::min);
+    let tmax = temperature
+        .iter()
+        .copied()
+        .fold(f32::NEG_INFINITY, f32::max);
+    let tref = 0.5f32 * (tmin + tmax);
+    let trel: Vec<f32> = temperature.iter().map(|t| t - tref).collect();
+    let mut ids = device_id.to_vec();
+    ids.sort_by(f64::total_cmp);
+    let id_median = match ids.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => ids.get(n / 2).copied().unwrap_or(0.0),
+        n => {
+            (ids.get(n / 2 - 1).copied().unwrap_or(0.0) + ids.get(n / 2).copied().unwrap_or(0.0))
+                / 2.0
+        }
+    };
+    let mut coef = [[0.0; 4]; 3];
+    for (c, axis) in coef.iter_mut().zip(axes) {
+        let filtered = medfilt(axis, 31);
+        let y: Vec<f32> = if kind == 'A' {
+            let m = median32(&filtered);
+            filtered.iter().map(|v| v - m).collect()
+        } else {
+            filtered
+        };
+        let (x, y) = resample(&trel, &y);
+        let p = polyfit(&x, &y, 3)?;
+        for (k, v) in p.iter().rev().enumerate() {
+            if let Some(slot) = c.get_mut(k) {
+                *slot = *v;
+            }
+        }
+    }
+    Some(Px4Sensor {
+        kind,
+        instance,
+        device_id: id_median as i64,
+        tmin,
+        tmax,
+        tref,
+        coef,
+    })
+}
+
+impl Px4Sensor {
+    /// The parameter lines of QGroundControl's `.params` format (`1 1 NAME VALUE TYPE`, tab
+    /// separated; type 6 for the id, 9 for floats), in the tool's order of keys.
+    pub fn params(&self) -> Vec<String> {
+        let p = format!("TC_{}{}", self.kind, self.instance);
+        let mut lines = vec![
+            format!("1\t1\t{p}_ID\t{}\t6", self.device_id),
+            format!("1\t1\t{p}_TMIN\t{}\t9", self.tmin),
+            format!("1\t1\t{p}_TMAX\t{}\t9", self.tmax),
+            format!("1\t1\t{p}_TREF\t{}\t9", self.tref),
+        ];
+        let mut coefs = Vec::new();
+        for (axis, c) in self.coef.iter().enumerate() {
+            for (k, v) in c.iter().enumerate() {
+                coefs.push((format!("{p}_X{k}_{axis}"), *v));
+            }
+        }
+        // The tool sorts the gyro's keys and keeps the accelerometer's in their dict order
+        // (X0..X3 of axis 0, then axis 1, …), which this order is too.
+        if self.kind == 'G' {
+            coefs.sort_by(|a, b| a.0.cmp(&b.0));
+        }
+        lines.extend(
+            coefs
+                .into_iter()
+                .map(|(k, v)| format!("1\t1\t{k}\t{v:?}\t9")),
+        );
+        lines
+    }
+
+    /// The bias the firmware subtracts at temperature `t` on axis `axis` (temperature clamped to
+    /// `[TMIN, TMAX]`, as PX4's `TemperatureCompensation`).
+    pub fn offset(&self, axis: usize, t: f64) -> f64 {
+        let dt = t.clamp(f64::from(self.tmin), f64::from(self.tmax)) - f64::from(self.tref);
+        let c = self.coef.get(axis).copied().unwrap_or([0.0; 4]);
+        c[0] + dt * (c[1] + dt * (c[2] + dt * c[3]))
+    }
+}
+
+/// One ArduPilot IMU instance's temperature calibration (the cubic version of the tool).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ArduImu {
+    /// The IMU instance (0-based; parameters are numbered from 1).
+    pub instance: u8,
+    /// `TMIN`, `TMAX` (°C).
+    pub tmin: f64,
+    /// See `tmin`.
+    pub tmax: f64,
+    /// Accelerometer polynomial per axis, highest power first (`[p3, p2, p1, p0]`).
+    pub acc: [[f64; 4]; 3],
+    /// Gyro polynomial per axis.
+    pub gyr: [[f64; 4]; 3],
+}
+
+/// ArduPilot's reference temperature (°C).
+pub const ARDU_TREF: f64 = 35.0;
+/// ArduPilot's parameter scale.
+pub const ARDU_SCALE: f64 = 1e6;
+
+/// The tool's moving average over `w` samples ("valid" part: `n − w + 1` values, through a
+/// cumulative sum as the tool computes it).
+fn moving_average(v: &[f64], w: usize) -> Vec<f64> {
+    let mut c = Vec::with_capacity(v.len());
+    let mut s = 0.0;
+    for x in v {
+        s += x;
+        c.push(s);
+    }
+    let shifted: Vec<f64> = (0..c.len())
+        .map(|i| {
+            let here = c.get(i).copied().unwrap_or(0.0);
+            if i >= w {
+                here - c.get(i - w).copied().unwrap_or(0.0)
+            } else {
+                here
+            }
+        })
+        .collect();
+    shifted
+        .get(w.saturating_sub(1)..)
+        .unwrap_or(&[])
+        .iter()
+        .map(|x| x / w as f64)
+        .collect()
+}
+
+/// ArduPilot's fit of one IMU instance from its records: time (s), temperature, accelerometer
+/// and gyro axes.
+pub fn ardupilot_fit(
+    instance: u8,
+    time: &[f64],
+    temperature: &[f64],
+    acc: [&[f64]; 3],
+    gyr: [&[f64]; 3],
+) -> Option<ArduImu> {
+    let n = time.len();
+    let seconds = time.last()? - time.first()?;
+    let window = ((n as f64 / seconds) as usize) * 2;
+    let filt = |v: &[f64]| {
+        if window > 1 {
+            moving_average(v, window)
+        } else {
+            v.to_vec()
+        }
+    };
+    let t = filt(temperature);
+    let tmin = t.iter().copied().fold(f64::INFINITY, f64::min);
+    let tmax = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let trel: Vec<f64> = t.iter().map(|x| x - ARDU_TREF).collect();
+    let mut out = ArduImu {
+        instance,
+        tmin,
+        tmax,
+        acc: [[0.0; 4]; 3],
+        gyr: [[0.0; 4]; 3],
+    };
+    for k in 0..3 {
+        let a = filt(acc.get(k)?);
+        let mean = a.iter().sum::<f64>() / a.len().max(1) as f64;
+        let a: Vec<f64> = a.iter().map(|v| v - mean).collect();
+        let pa = polyfit(&trel, &a, 3)?;
+        let pg = polyfit(&trel, &filt(gyr.get(k)?), 3)?;
+        if let (Some(sa), Some(sg)) = (out.acc.get_mut(k), out.gyr.get_mut(k)) {
+            sa.copy_from_slice(pa.get(..4)?);
+            sg.copy_from_slice(pg.get(..4)?);
+        }
+    }
+    Some(out)
+}
+
+impl ArduImu {
+    /// The parameter lines (`NAME VALUE`), in the tool's order and rounding.
+    pub fn params(&self) -> Vec<String> {
+        let i = self.instance + 1;
+        let mut lines = vec![
+            format!("INS_TCAL{i}_ENABLE 1"),
+            format!("INS_TCAL{i}_TMIN {:.1}", self.tmin),
+            format!("INS_TCAL{i}_TMAX {:.1}", self.tmax),
+        ];
+        for (name, c) in [("ACC", &self.acc), ("GYR", &self.gyr)] {
+            for p in 1..=3usize {
+                for (axis, label) in ["X", "Y", "Z"].iter().enumerate() {
+                    let v = c
+                        .get(axis)
+                        .and_then(|a| a.get(3 - p))
+                        .copied()
+                        .unwrap_or(0.0);
+                    lines.push(format!(
+                        "INS_TCAL{i}_{name}{p}_{label} {:.9}",
+                        v * ARDU_SCALE
+                    ));
+                }
+            }
+        }
+        lines
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polyfit_recovers_a_cubic_and_medfilt_pads_with_zeros() {
+        let x: Vec<f64> = (0..50).map(|i| f64::from(i) * 0.3 - 7.0).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .map(|x| 0.5 - 0.2 * x + 0.03 * x * x - 0.004 * x * x * x)
+            .collect();
+        let p = polyfit(&x, &y, 3).unwrap();
+        for (a, b) in p.iter().zip([-0.004, 0.03, -0.2, 0.5]) {
+            assert!((a - b).abs() < 1e-12, "{p:?}");
+        }
+        assert_eq!(medfilt(&[5.0, 5.0, 5.0], 5), [0.0, 5.0, 0.0]);
+        assert_eq!(moving_average(&[1.0, 2.0, 3.0, 4.0], 2), [1.5, 2.5, 3.5]);
+    }
+}
+
+/// The parameters of every IMU instance of a log, in the autopilot's own file format.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ParamFile {
+    /// `px4` or `ardupilot`.
+    pub format: &'static str,
+    /// PX4 sensors (gyros, then accelerometers).
+    pub px4: Vec<Px4Sensor>,
+    /// ArduPilot IMUs.
+    pub ardupilot: Vec<ArduImu>,
+    /// Instances the tool could not fit, with why.
+    pub skipped: Vec<String>,
+}
+
+impl ParamFile {
+    /// The file's text.
+    pub fn text(&self) -> String {
+        let mut out = String::new();
+        if self.format == "px4" {
+            out.push_str(
+                "# Sensor thermal compensation parameters\n#\n# Vehicle-Id Component-Id Name Value Type\n",
+            );
+            for s in self.px4.iter().filter(|s| s.kind == 'A') {
+                out.extend(s.params().into_iter().map(|l| l + "\n"));
+            }
+            for s in self.px4.iter().filter(|s| s.kind == 'G') {
+                out.extend(s.params().into_iter().map(|l| l + "\n"));
+            }
+        } else {
+            for i in &self.ardupilot {
+                out.extend(i.params().into_iter().map(|l| l + "\n"));
+            }
+        }
+        out
+    }
+}
+
+fn f32s(v: &[f64]) -> Vec<f32> {
+    v.iter().map(|x| *x as f32).collect()
+}
+
+/// The autopilot's thermal calibration of every IMU instance in the log at `path`, as its tool
+/// computes it (see the module doc).
+pub fn from_log(path: &std::path::Path) -> Result<ParamFile, crate::TrainError> {
+    use crate::dataset::log::{self, Kind};
+    let file = path.display().to_string();
+    let not_log = || crate::DataError::LogColumn {
+        file: file.clone(),
+        what: "not an autopilot log (.ulg or DataFlash .bin): autopilot parameters come from one"
+            .into(),
+    };
+    let (kind, tables) = log::read(path)?.ok_or_else(not_log)?;
+    let mut out = ParamFile {
+        format: if kind == Kind::ULog {
+            "px4"
+        } else {
+            "ardupilot"
+        },
+        px4: Vec::new(),
+        ardupilot: Vec::new(),
+        skipped: Vec::new(),
+    };
+    let col = |m: &log::Message, f: &str| {
+        m.fields
+            .iter()
+            .find(|(n, _)| n == f)
+            .map(|(_, v)| v.clone())
+    };
+    match kind {
+        Kind::ULog => {
+            for (kind, topic) in [('G', "sensor_gyro"), ('A', "sensor_accel")] {
+                for i in 0..4u8 {
+                    let Some(m) = tables.message(topic, i) else {
+                        continue;
+                    };
+                    let (Some(t), Some(x), Some(y), Some(z)) =
+                        (col(m, "temperature"), col(m, "x"), col(m, "y"), col(m, "z"))
+                    else {
+                        continue;
+                    };
+                    let t = f32s(&t);
+                    if t.first().is_none_or(|v| v.is_nan()) {
+                        out.skipped.push(format!(
+                            "TC_{kind}{i}: {topic}[{i}] logs no temperature (NaN): no thermal                              calibration (PX4's tool skips it too)"
+                        ));
+                        continue;
+                    }
+                    let (lo, hi) = t
+                        .iter()
+                        .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), v| {
+                            (l.min(*v), h.max(*v))
+                        });
+                    if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
+                        out.skipped.push(format!(
+                            "TC_{kind}{i}: {topic}[{i}]'s temperature never varies ({lo} °C): no cubic \
+                             in temperature can be fitted (PX4's tool divides by zero here)"
+                        ));
+                        continue;
+                    }
+                    let ids = col(m, "device_id").unwrap_or_default();
+                    let (x, y, z) = (f32s(&x), f32s(&y), f32s(&z));
+                    match px4_fit(kind, i, &t, &ids, [&x, &y, &z]) {
+                        Some(s) => out.px4.push(s),
+                        None => out.skipped.push(format!("TC_{kind}{i}: the fit failed")),
+                    }
+                }
+            }
+        }
+        Kind::DataFlash => {
+            for i in 0..3u8 {
+                let Some(m) = tables.message("IMU", i) else {
+                    continue;
+                };
+                let names = ["T", "AccX", "AccY", "AccZ", "GyrX", "GyrY", "GyrZ"];
+                let cols: Vec<Option<Vec<f64>>> = names.iter().map(|n| col(m, n)).collect();
+                let [
+                    Some(t),
+                    Some(ax),
+                    Some(ay),
+                    Some(az),
+                    Some(gx),
+                    Some(gy),
+                    Some(gz),
+                ] = <[Option<Vec<f64>>; 7]>::try_from(cols).unwrap_or_default()
+                else {
+                    continue;
+                };
+                let time: Vec<f64> = m.time_us.iter().map(|&u| u as f64 * 1e-6).collect();
+                match ardupilot_fit(i, &time, &t, [&ax, &ay, &az], [&gx, &gy, &gz]) {
+                    Some(s) => out.ardupilot.push(s),
+                    None => out
+                        .skipped
+                        .push(format!("INS_TCAL{}: the fit failed", i + 1)),
+                }
+            }
+        }
+    }
+    if out.px4.is_empty() && out.ardupilot.is_empty() {
+        return Err(crate::DataError::LogColumn {
+            file,
+            what: format!(
+                "no IMU instance to calibrate ({}){}",
+                if kind == Kind::ULog {
+                    "PX4: sensor_gyro / sensor_accel with temperature, x, y, z"
+                } else {
+                    "ArduPilot: IMU with T, AccX..Z, GyrX..Z"
+                },
+                if out.skipped.is_empty() {
+                    String::new()
+                } else {
+                    format!("; {}", out.skipped.join("; "))
+                }
+            ),
+        }
+        .into());
+    }
+    Ok(out)
+}
