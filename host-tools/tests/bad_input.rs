@@ -455,7 +455,40 @@ fn catalogue() -> Vec<Case> {
         case("missing required --out", "fit --data run.csv --target gyro_dph").usage().says(&["--out"]),
         case("unknown command", "fitt").usage().says(&["fitt"]),
         case("unknown preset", "simulate --preset nope --out out.tcm").says(&["unknown preset", "nope"]),
+        // autopilot logs and units (issue 23)
+        case("truncated ULog", "fit --data cut.ulg --target sensor_baro.pressure --feature sensor_baro.temperature --out out.tcm").file("cut.ulg", truncated_ulog()).says(&["cut.ulg", "byte", "truncated"]),
+        case("truncated ULog: autopilot-params", "autopilot-params --data cut.ulg --out out.params").file("cut.ulg", truncated_ulog()).says(&["cut.ulg", "byte", "truncated"]),
+        case("DataFlash with a missing FMT", "fit --data nofmt.bin --target IMU.GyrX --feature IMU.T --out out.tcm").file("nofmt.bin", dataflash_missing_fmt()).says(&["nofmt.bin: byte 89", "type 129", "no FMT"]),
+        case("not a ULog though named .ulg", "fit --data fake.ulg --target a.b --feature a.c --out out.tcm").file("fake.ulg", "time_s,x\n0,1\n").says(&["fake.ulg: byte 0", "not a ULog"]),
+        case("a unit that does not parse", "FIT --data run.csv --out out.tcm --unit furlong/fortnight").says(&["--unit", "`furlong/fortnight`", "character 1", "`furlong` is not a unit"]),
+        case("a unit with a dangling exponent", "FIT --data run.csv --out out.tcm --unit m/s^").says(&["--unit", "character 5", "no exponent"]),
+        case("autopilot-params from a CSV", "autopilot-params --data run.csv --out out.params").says(&["run.csv", "not an autopilot log"]),
     ]
+}
+
+/// The real PX4 ULog of `data/autopilot/`, cut in the middle of its data section.
+fn truncated_ulog() -> Vec<u8> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/autopilot/px4_sample_small.ulg");
+    let mut b = std::fs::read(p).unwrap();
+    b.truncate(b.len() / 2 + 7);
+    b
+}
+
+/// A DataFlash log whose IMU records (type 129) come with no FMT record defining them.
+fn dataflash_missing_fmt() -> Vec<u8> {
+    let mut fmt = vec![0xA3, 0x95, 0x80, 0x80, 89];
+    fmt.extend_from_slice(b"FMT\0");
+    let mut f = [0u8; 16];
+    f[..5].copy_from_slice(b"BBnNZ");
+    fmt.extend_from_slice(&f);
+    let mut l = [0u8; 64];
+    l[..30].copy_from_slice(b"Type,Length,Name,Format,Labels");
+    fmt.extend_from_slice(&l);
+    let mut imu = vec![0xA3, 0x95, 129];
+    imu.extend_from_slice(&1_000_000u64.to_le_bytes());
+    imu.extend_from_slice(&0.5f32.to_le_bytes());
+    imu.extend_from_slice(&35.0f32.to_le_bytes());
+    [fmt, imu].concat()
 }
 
 /// Rows fixed in the core and the trainer: the CSV reader, option ranges, the parser, model plausibility.
