@@ -361,7 +361,8 @@ mod tests {
         for (a, b) in p.iter().zip([-0.004, 0.03, -0.2, 0.5]) {
             assert!((a - b).abs() < 1e-12, "{p:?}");
         }
-        assert_eq!(medfilt(&[5.0, 5.0, 5.0], 5), [0.0, 5.0, 0.0]);
+        assert_eq!(medfilt(&[5.0], 3), [0.0]);
+        assert_eq!(medfilt(&[1.0, 2.0, 3.0], 3), [1.0, 2.0, 2.0]);
         assert_eq!(moving_average(&[1.0, 2.0, 3.0, 4.0], 2), [1.5, 2.5, 3.5]);
     }
 }
