@@ -369,7 +369,9 @@ fn log_column_names_are_inputs() {
     ] {
         assert!(tcomp_core::parse::is_column_name(ok), "{ok}");
     }
-    for bad in ["", "IMU.", "IMU[]", "IMU[1", "IMU[a].T", ".T", "IMU..T", "IMU.1x", "a b"] {
+    for bad in [
+        "", "IMU.", "IMU[]", "IMU[1", "IMU[a].T", ".T", "IMU..T", "IMU.1x", "a b",
+    ] {
         assert!(!tcomp_core::parse::is_column_name(bad), "{bad:?}");
     }
     let mut b = ProgramBuilder::<'static, 16, 4>::new();

@@ -293,6 +293,7 @@ pub fn respell_blob(
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::panic)]
 mod tests {
     use super::*;
 

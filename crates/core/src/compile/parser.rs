@@ -269,7 +269,11 @@ impl<'a, const N: usize, const F: usize, S: Real> Parser<'a, '_, N, F, S> {
         loop {
             let at = self.pos;
             match bytes.get(at) {
-                Some(b'.') if bytes.get(at + 1).is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_') => {
+                Some(b'.')
+                    if bytes
+                        .get(at + 1)
+                        .is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_') =>
+                {
                     self.pos = at + 1;
                     while self
                         .peek()

@@ -214,12 +214,10 @@ fn repeated_time(data: Dataset, opts: &LoadOptions) -> Result<Dataset, DataError
     for (b, old) in out.bad.iter_mut().zip(&data.bad) {
         if let Some(o) = &old.first
             && o.kind != BadKind::Missing
-            && b.first.is_some()
+            && let Some(f) = b.first.as_mut()
         {
-            if let Some(f) = b.first.as_mut() {
-                f.kind = o.kind;
-                f.text = o.text.clone();
-            }
+            f.kind = o.kind;
+            f.text = o.text.clone();
         }
     }
     out.notes = data.notes.clone();
