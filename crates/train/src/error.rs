@@ -60,7 +60,9 @@ pub enum TrainError {
     /// A model's unit and a channel's are one quantity at another scale: flying one as the other
     /// would be off by the factor.
     #[error(
-        "{file}: the model is in {model}, the channel in {board}: one {model} is {factor} {board},          so the model would be off by that factor; fit it with the target in {board} (scale the          target column by {factor}) and --unit {board}"
+        "{file}: the model is in {model}, the channel in {board}: one {model} is {factor} {board}, \
+         so the model would be off by that factor; fit it with the target in {board} (scale the \
+         target column by {factor}) and --unit {board}"
     )]
     UnitScale {
         /// The blob.

@@ -5,9 +5,12 @@
 //! row, ends the stream as if the file had ended — right for a plotting tool, wrong for a
 //! calibration, which must not be fitted on a silently shortened or thinned log. So the records
 //! are walked once by their lengths (each record `A3 95 type`, its length given by the type's
-//! FMT record): a record of a type with no FMT, bytes that are not a record header, or a file
-//! ending partway through a record is refused with its byte offset. Only a log that walks cleanly
-//! is decoded.
+//! FMT record): a record of a type with no FMT or bytes that are not a record header are refused
+//! with their byte offset. Only a log that walks cleanly is decoded. A file that ends partway
+//! through its last record is how a real log ends when the logger stops or power goes while a
+//! record is being written (ArduPilot writes in blocks): that partial record is dropped, with a
+//! note naming its byte offset; every record before it is whole. Damage before the end is
+//! refused, so a log is never silently thinned.
 
 use super::DataError;
 use super::log::{Message, Tables};
@@ -18,8 +21,14 @@ use std::collections::HashMap;
 const FMT_TYPE: u8 = 0x80;
 const FMT_LEN: u8 = 89;
 
+/// What the walk found: the number of whole records, and where a partial last record starts.
+struct Walk {
+    records: usize,
+    partial_at: Option<usize>,
+}
+
 /// Walks the records by their lengths; the first damage found, as an error.
-fn walk(file: &str, bytes: &[u8]) -> Result<usize, DataError> {
+fn walk(file: &str, bytes: &[u8]) -> Result<Walk, DataError> {
     let err = |offset: usize, what: String| DataError::Log {
         file: file.to_string(),
         offset: offset as u64,
@@ -46,6 +55,16 @@ fn walk(file: &str, bytes: &[u8]) -> Result<usize, DataError> {
                     },
                 ));
             }
+            None if off > 0
+                && bytes
+                    .get(off..)
+                    .is_some_and(|t| [0xA3, 0x95].starts_with(t)) =>
+            {
+                return Ok(Walk {
+                    records,
+                    partial_at: Some(off),
+                });
+            }
             None => {
                 return Err(err(
                     off,
@@ -64,6 +83,12 @@ fn walk(file: &str, bytes: &[u8]) -> Result<usize, DataError> {
             ));
         };
         let end = off + usize::from(len);
+        if end > bytes.len() && records > 0 {
+            return Ok(Walk {
+                records,
+                partial_at: Some(off),
+            });
+        }
         if end > bytes.len() {
             return Err(err(
                 off,
@@ -92,15 +117,46 @@ fn walk(file: &str, bytes: &[u8]) -> Result<usize, DataError> {
         records += 1;
         off = end;
     }
-    Ok(records)
+    Ok(Walk {
+        records,
+        partial_at: None,
+    })
+}
+
+/// A `PARM` record's parameter name (a text field).
+fn param_name(entry: &ardupilot_binlog::Entry) -> Option<String> {
+    entry
+        .fields()
+        .find(|(label, _)| *label == "Name")
+        .and_then(|(_, v)| match v {
+            ardupilot_binlog::FieldValue::String(s) => Some(s.trim_end_matches('\0').to_string()),
+            _ => None,
+        })
 }
 
 /// Reads the DataFlash log in `bytes`; `file` names it in errors.
 pub(super) fn read(file: &str, bytes: &[u8]) -> Result<Tables, DataError> {
-    let records = walk(file, bytes)?;
+    let Walk {
+        records,
+        partial_at,
+    } = walk(file, bytes)?;
+    let total = bytes.len();
+    let bytes = bytes.get(..partial_at.unwrap_or(total)).unwrap_or(bytes);
+    let notes = partial_at
+        .map(|at| {
+            format!(
+                "{file}: the log ends partway through a record at byte {at} ({} bytes, as when \
+                 the logger stops mid-record): that partial record is dropped, the {records} \
+                 records before it are whole",
+                total - at
+            )
+        })
+        .into_iter()
+        .collect();
     let mut messages: HashMap<(String, u8), Message> = HashMap::new();
     let mut order: Vec<(String, u8)> = Vec::new();
     let mut decoded = 0usize;
+    let mut params = Vec::new();
     for entry in Reader::new(bytes) {
         let entry = entry.map_err(|e| DataError::Log {
             file: file.to_string(),
@@ -108,6 +164,12 @@ pub(super) fn read(file: &str, bytes: &[u8]) -> Result<Tables, DataError> {
             what: format!("a record does not decode: {e}"),
         })?;
         decoded += 1;
+        if entry.name == "PARM"
+            && let (Some(name), Some(value)) = (param_name(&entry), entry.get_f64("Value"))
+        {
+            params.push((name, value));
+            continue;
+        }
         let Some(t) = entry.timestamp_usec else {
             continue;
         };
@@ -146,5 +208,9 @@ pub(super) fn read(file: &str, bytes: &[u8]) -> Result<Tables, DataError> {
         .into_iter()
         .filter_map(|k| messages.remove(&k))
         .collect();
-    Ok(Tables { messages })
+    Ok(Tables {
+        messages,
+        params,
+        notes,
+    })
 }

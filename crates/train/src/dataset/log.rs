@@ -112,6 +112,11 @@ impl Message {
 pub struct Tables {
     /// The messages, instances apart.
     pub messages: Vec<Message>,
+    /// The log's parameter records in file order (ArduPilot's `PARM`: name and value), for the
+    /// autopilot's own calibration tool, which reads the calibration the log flew with from them.
+    pub params: Vec<(String, f64)>,
+    /// What the reader did to the log that a user should know (a partial last record dropped).
+    pub notes: Vec<String>,
 }
 
 impl Tables {
@@ -250,6 +255,7 @@ impl Tables {
             cols.push(interpolate(&other.time_us, values, &m.time_us));
         }
         let mut d = Dataset::from_parts(&format!("{file}#{label}"), names, cols, m.records.clone());
+        d.notes.extend(self.notes.iter().cloned());
         d.notes.push(format!(
             "{file}: rows are the {} records of {label} (time_s from its timestamps){}",
             m.records.len(),

@@ -120,5 +120,9 @@ pub(super) fn read(file: &str, bytes: &[u8]) -> Result<Tables, DataError> {
         .into_iter()
         .filter_map(|k| messages.remove(&k))
         .collect();
-    Ok(Tables { messages })
+    Ok(Tables {
+        messages,
+        params: Vec::new(),
+        notes: Vec::new(),
+    })
 }
