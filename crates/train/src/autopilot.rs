@@ -9,12 +9,18 @@
 //! `T − TREF` (`numpy.polyfit`); parameters `TC_Gk_X{0..3}_{axis}` / `TC_Ak_…` and the device id.
 //! Temperatures and their differences are single precision, as the tool's numpy float32 arrays.
 //!
-//! ArduPilot (`Tools/scripts/tempcal_IMU.py`, the cubic version): per `IMU` instance, a 2 s moving
-//! average of every column, `TMIN`/`TMAX` of the averaged temperature, a cubic in `T − 35` fitted
-//! to the gyro and to the accelerometer less its mean; parameters `INS_TCALn_{ACC,GYR}{1..3}_{X,Y,Z}`
-//! are the coefficients of `(T−35)^p`, p = 1..3, times 1e6 (the constant is dropped: the
-//! offsets calibration owns it). Not handled: a log whose `AHRS_ORIENTATION` is not 0 or whose
-//! IMU already flew a temperature calibration (the tool rotates and subtracts those first).
+//! ArduPilot (`Tools/scripts/tempcal_IMU.py`, the cubic version, as published in the
+//! `ardupilot-methodic-configurator` package): per `IMU` instance, the calibration the log already
+//! flew with (its `PARM` records: `INS_TCALn_*`, `INS_ACCn_CALTEMP`, `INS_GYRn_CALTEMP`) taken
+//! out of each record, a 2 s moving average of every column, `TMIN`/`TMAX` of the averaged
+//! temperature, a cubic in `T − 35` fitted to the gyro and to the accelerometer less its value at
+//! `INS_ACCn_CALTEMP` (its mean when the log has none); parameters
+//! `INS_TCALn_{ACC,GYR}{1..3}_{X,Y,Z}` are the coefficients of `(T−35)^p`, p = 1..3, times 1e6
+//! (the constant is dropped: the offsets calibration owns it). The log's parameters are the ones
+//! in force for every record (the firmware read them at boot, before logging); the script reads
+//! them in file order, which on a log whose parameter burst interleaves with the first IMU
+//! records stops it with a `KeyError` (`data/autopilot/README.md`). Refused: a log whose
+//! `AHRS_ORIENTATION` is not 0 (the script first rotates the data into the sensor frame).
 
 use nalgebra::{DMatrix, DVector};
 
@@ -40,7 +46,9 @@ pub fn polyfit(x: &[f64], y: &[f64], deg: usize) -> Option<Vec<f64>> {
     }
     let b = DVector::from_iterator(n, y.iter().take(n).copied());
     let svd = a.svd(true, true);
-    let c = svd.solve(&b, 1e-15 * n as f64).ok()?;
+    // numpy's rcond: singular values below n·eps of the largest are dropped.
+    let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
+    let c = svd.solve(&b, n as f64 * f64::EPSILON * largest).ok()?;
     Some(c.iter().zip(&scale).map(|(c, s)| c / s).collect())
 }
 
@@ -274,14 +282,224 @@ fn moving_average(v: &[f64], w: usize) -> Vec<f64> {
         .collect()
 }
 
-/// ArduPilot's fit of one IMU instance from its records: time (s), temperature, accelerometer
-/// and gyro axes.
+/// `numpy.poly1d(c)(x)` (Horner's rule, highest power first).
+fn polyval(c: &[f64; 4], x: f64) -> f64 {
+    c.iter().fold(0.0, |y, k| y * x + k)
+}
+
+/// The temperature calibration a DataFlash log flew with, from its `PARM` records as the tool
+/// reads them (its `Coefficients` of the log).
+#[derive(Clone, Debug)]
+pub struct LogCalibration {
+    /// `INS_TCALn_ENABLE` per IMU (0 when not logged).
+    pub enable: [f64; 3],
+    /// `INS_TCALn_TMIN` (−100 when not logged, as the tool).
+    pub tmin: [f64; 3],
+    /// `INS_TCALn_TMAX`.
+    pub tmax: [f64; 3],
+    /// Accelerometer polynomial per IMU and axis, highest power first, constant 0 (`None`: no
+    /// coefficient of that axis logged).
+    pub acc: [[Option<[f64; 4]>; 3]; 3],
+    /// Gyro polynomial per IMU and axis.
+    pub gyr: [[Option<[f64; 4]>; 3]; 3],
+    /// `INS_ACCn_CALTEMP`, when logged.
+    pub acc_caltemp: [Option<f64>; 3],
+    /// `INS_GYRn_CALTEMP`, when logged.
+    pub gyr_caltemp: [Option<f64>; 3],
+    /// IMUs whose `INS_TCALn_ENABLE` changed within the log (a calibration learnt in flight): the
+    /// tool stops reading them.
+    pub stopped: [bool; 3],
+    /// `AHRS_ORIENTATION`.
+    pub orientation: f64,
+}
+
+impl LogCalibration {
+    /// The calibration in `params` (name, value; file order).
+    pub fn from_params(params: &[(String, f64)]) -> Self {
+        let mut c = Self {
+            enable: [0.0; 3],
+            tmin: [-100.0; 3],
+            tmax: [-100.0; 3],
+            acc: [[None; 3]; 3],
+            gyr: [[None; 3]; 3],
+            acc_caltemp: [None; 3],
+            gyr_caltemp: [None; 3],
+            stopped: [false; 3],
+            orientation: 0.0,
+        };
+        let imu = |digit: &str| -> Option<usize> {
+            let d: usize = digit.parse().ok()?;
+            (1..=3).contains(&d).then(|| d - 1)
+        };
+        for (name, value) in params {
+            let v = *value;
+            if name == "AHRS_ORIENTATION" {
+                c.orientation = v;
+            } else if let Some(rest) = name.strip_prefix("INS_TCAL") {
+                let Some((d, field)) = rest.split_at_checked(1) else {
+                    continue;
+                };
+                let Some(i) = imu(d) else { continue };
+                if c.stopped.get(i).copied().unwrap_or(true) {
+                    continue;
+                }
+                match field {
+                    "_ENABLE" => {
+                        let was = c.enable.get(i).copied().unwrap_or(0.0);
+                        if (v == 1.0 && was == 2.0) || (v == 0.0 && was == 1.0) {
+                            if let Some(s) = c.stopped.get_mut(i) {
+                                *s = true;
+                            }
+                        } else if let Some(e) = c.enable.get_mut(i) {
+                            *e = v;
+                        }
+                    }
+                    "_TMIN" => {
+                        if let Some(t) = c.tmin.get_mut(i) {
+                            *t = v;
+                        }
+                    }
+                    "_TMAX" => {
+                        if let Some(t) = c.tmax.get_mut(i) {
+                            *t = v;
+                        }
+                    }
+                    _ => {
+                        // `_ACC1_X` … `_GYR3_Z`
+                        let b = field.as_bytes();
+                        let (Some(kind), Some(&p), Some(&axis)) =
+                            (field.get(1..4), b.get(4), b.get(6))
+                        else {
+                            continue;
+                        };
+                        if field.len() != 7 || b.get(5) != Some(&b'_') {
+                            continue;
+                        }
+                        let (Some(p), Some(axis)) = (
+                            (b'1'..=b'3').contains(&p).then(|| usize::from(p - b'0')),
+                            [b'X', b'Y', b'Z'].iter().position(|a| *a == axis),
+                        ) else {
+                            continue;
+                        };
+                        let table = match kind {
+                            "ACC" => &mut c.acc,
+                            "GYR" => &mut c.gyr,
+                            _ => continue,
+                        };
+                        if let Some(slot) = table.get_mut(i).and_then(|t| t.get_mut(axis)) {
+                            let poly = slot.get_or_insert([0.0; 4]);
+                            if let Some(k) = poly.get_mut(3 - p) {
+                                *k = v / ARDU_SCALE;
+                            }
+                        }
+                    }
+                }
+            } else {
+                for (prefix, table) in [
+                    ("INS_ACC", &mut c.acc_caltemp),
+                    ("INS_GYR", &mut c.gyr_caltemp),
+                ] {
+                    let Some(rest) = name.strip_prefix(prefix) else {
+                        continue;
+                    };
+                    let Some((d, tail)) = rest.split_at_checked(1) else {
+                        continue;
+                    };
+                    if let (Some(i), true) = (imu(d), tail.starts_with("_CALTEMP"))
+                        && !c.stopped.get(i).copied().unwrap_or(true)
+                        && let Some(slot) = table.get_mut(i)
+                    {
+                        *slot = Some(v);
+                    }
+                }
+            }
+        }
+        c
+    }
+
+    /// The correction the firmware applied to IMU `imu`'s axis at temperature `t`, calibrated
+    /// at `cal` (the tool's `Coefficients.correction`: 0 when disabled or uncalibrated).
+    fn correction(&self, poly: Option<[f64; 4]>, imu: usize, t: f64, cal: f64) -> f64 {
+        let (Some(poly), Some(&lo), Some(&hi)) = (poly, self.tmin.get(imu), self.tmax.get(imu))
+        else {
+            return 0.0;
+        };
+        if self.enable.get(imu) != Some(&1.0) || cal < -80.0 {
+            return 0.0;
+        }
+        let clamp = |v: f64| v.max(lo).min(hi);
+        polyval(&poly, clamp(cal) - ARDU_TREF) - polyval(&poly, clamp(t) - ARDU_TREF)
+    }
+
+    /// IMU `imu`'s records with the log's calibration taken out (`acc`, `gyr` in place).
+    pub fn remove(
+        &self,
+        imu: usize,
+        temperature: &[f64],
+        acc: &mut [Vec<f64>; 3],
+        gyr: &mut [Vec<f64>; 3],
+    ) {
+        let (Some(ap), Some(gp)) = (self.acc.get(imu), self.gyr.get(imu)) else {
+            return;
+        };
+        let acal = self
+            .acc_caltemp
+            .get(imu)
+            .copied()
+            .flatten()
+            .unwrap_or(ARDU_TREF);
+        let gcal = self
+            .gyr_caltemp
+            .get(imu)
+            .copied()
+            .flatten()
+            .unwrap_or(ARDU_TREF);
+        for (axis, (a, g)) in acc.iter_mut().zip(gyr.iter_mut()).enumerate() {
+            let (pa, pg) = (
+                ap.get(axis).copied().flatten(),
+                gp.get(axis).copied().flatten(),
+            );
+            for ((va, vg), &t) in a.iter_mut().zip(g.iter_mut()).zip(temperature) {
+                *va -= self.correction(pa, imu, t, acal);
+                *vg -= self.correction(pg, imu, t, gcal);
+            }
+        }
+    }
+}
+
+/// The tool's `accel_at_temp`: the (averaged) value where the temperature first rises through
+/// `cal`, interpolated linearly; the first value below the first temperature, the last if never.
+fn value_at_temperature(t: &[f64], v: &[f64], cal: f64) -> f64 {
+    let first = v.first().copied().unwrap_or(f64::NAN);
+    if t.first().is_some_and(|t0| cal < *t0) {
+        return first;
+    }
+    for (tw, vw) in t.windows(2).zip(v.windows(2)) {
+        if let ([t1, t2], [v1, v2]) = (tw, vw)
+            && *t1 <= cal
+            && cal <= *t2
+        {
+            let dt = t2 - t1;
+            if dt == 0.0 {
+                return *v1;
+            }
+            let p = (cal - t1) / dt;
+            return v1 + (v2 - v1) * p;
+        }
+    }
+    v.last().copied().unwrap_or(f64::NAN)
+}
+
+/// ArduPilot's fit of one IMU instance from its records (the log's calibration already taken
+/// out, [`LogCalibration::remove`]): time (s), temperature, accelerometer and gyro axes, and the
+/// accelerometer's calibration temperature when the log has one.
 pub fn ardupilot_fit(
     instance: u8,
     time: &[f64],
     temperature: &[f64],
     acc: [&[f64]; 3],
     gyr: [&[f64]; 3],
+    acc_caltemp: Option<f64>,
 ) -> Option<ArduImu> {
     let n = time.len();
     let seconds = time.last()? - time.first()?;
@@ -306,8 +524,11 @@ pub fn ardupilot_fit(
     };
     for k in 0..3 {
         let a = filt(acc.get(k)?);
-        let mean = a.iter().sum::<f64>() / a.len().max(1) as f64;
-        let a: Vec<f64> = a.iter().map(|v| v - mean).collect();
+        let ofs = match acc_caltemp {
+            Some(cal) => value_at_temperature(&t, &a, cal),
+            None => a.iter().sum::<f64>() / a.len().max(1) as f64,
+        };
+        let a: Vec<f64> = a.iter().map(|v| v - ofs).collect();
         let pa = polyfit(&trel, &a, 3)?;
         let pg = polyfit(&trel, &filt(gyr.get(k)?), 3)?;
         if let (Some(sa), Some(sg)) = (out.acc.get_mut(k), out.gyr.get_mut(k)) {
@@ -450,7 +671,8 @@ pub fn from_log(path: &std::path::Path) -> Result<ParamFile, crate::TrainError> 
                     let t = f32s(&t);
                     if t.first().is_none_or(|v| v.is_nan()) {
                         out.skipped.push(format!(
-                            "TC_{kind}{i}: {topic}[{i}] logs no temperature (NaN): no thermal                              calibration (PX4's tool skips it too)"
+                            "TC_{kind}{i}: {topic}[{i}] logs no temperature (NaN): no thermal \
+                             calibration (PX4's tool skips it too)"
                         ));
                         continue;
                     }
@@ -476,10 +698,33 @@ pub fn from_log(path: &std::path::Path) -> Result<ParamFile, crate::TrainError> 
             }
         }
         Kind::DataFlash => {
+            let cal = LogCalibration::from_params(&tables.params);
+            if cal.orientation != 0.0 {
+                return Err(crate::DataError::LogColumn {
+                    file,
+                    what: format!(
+                        "AHRS_ORIENTATION is {} in the log: ArduPilot's tool first rotates the \
+                         IMU data into the sensor frame, which tcomp does not do; calibrate from \
+                         a log flown with AHRS_ORIENTATION 0",
+                        cal.orientation
+                    ),
+                }
+                .into());
+            }
             for i in 0..3u8 {
                 let Some(m) = tables.message("IMU", i) else {
                     continue;
                 };
+                let k = usize::from(i);
+                if cal.stopped.get(k).copied().unwrap_or(false) {
+                    out.skipped.push(format!(
+                        "INS_TCAL{}: INS_TCAL{}_ENABLE changes within the log (a calibration \
+                         learnt in flight): ArduPilot's tool reads none of IMU[{i}]'s records",
+                        i + 1,
+                        i + 1
+                    ));
+                    continue;
+                }
                 let names = ["T", "AccX", "AccY", "AccZ", "GyrX", "GyrY", "GyrZ"];
                 let cols: Vec<Option<Vec<f64>>> = names.iter().map(|n| col(m, n)).collect();
                 let [
@@ -494,8 +739,13 @@ pub fn from_log(path: &std::path::Path) -> Result<ParamFile, crate::TrainError> 
                 else {
                     continue;
                 };
+                let (mut acc, mut gyr) = ([ax, ay, az], [gx, gy, gz]);
+                cal.remove(k, &t, &mut acc, &mut gyr);
                 let time: Vec<f64> = m.time_us.iter().map(|&u| u as f64 * 1e-6).collect();
-                match ardupilot_fit(i, &time, &t, [&ax, &ay, &az], [&gx, &gy, &gz]) {
+                let acc_caltemp = cal.acc_caltemp.get(k).copied().flatten();
+                let [ax, ay, az] = &acc;
+                let [gx, gy, gz] = &gyr;
+                match ardupilot_fit(i, &time, &t, [ax, ay, az], [gx, gy, gz], acc_caltemp) {
                     Some(s) => out.ardupilot.push(s),
                     None => out
                         .skipped

@@ -115,6 +115,105 @@ fn px4_parameters_equal_px4s_own_tool_on_the_same_log() {
     assert!((at(f64::from(g0.tref)) - g0.coef[2][0]).abs() < 1e-15);
 }
 
+const BIN: &str = "data/autopilot/ardupilot_cubeorangeplus.bin";
+
+/// `NAME -> value` of an ArduPilot parameter file (`NAME VALUE` lines).
+fn ardu_params(text: &str) -> BTreeMap<String, f64> {
+    text.lines()
+        .filter_map(|l| {
+            let mut f = l.split_whitespace();
+            Some((f.next()?.to_string(), f.next()?.parse().ok()?))
+        })
+        .collect()
+}
+
+#[test]
+fn fit_on_a_real_dataflash_log() {
+    let mut o = FitOptions::new("IMU[1].GyrZ", &["IMU[1].T"]);
+    o.method = Method::Poly3;
+    let d = Dataset::load_with(&repo(BIN), &o.load_options(), &Silent).unwrap();
+    // 1255 IMU records per instance, 50 s at 25 Hz, time from TimeUS
+    assert_eq!(d.len(), 1255);
+    let t = d.time("time_s").unwrap();
+    assert!(
+        (t[t.len() - 1] - t[0] - 50.16).abs() < 0.01,
+        "{}",
+        t[t.len() - 1] - t[0]
+    );
+    let f = fit(&d, &o).unwrap();
+    assert!(f.summary.train.residual_std.is_finite());
+    // the three IMUs are apart: IMU[2] runs ~9 °C cooler than IMU[0]
+    let d = load(&repo(BIN), &["IMU[0].T", "IMU[2].T"]).unwrap();
+    let (t0, t2) = (d.column("IMU[0].T").unwrap(), d.column("IMU[2].T").unwrap());
+    assert!(t0[0] - t2[0] > 8.0, "{} {}", t0[0], t2[0]);
+}
+
+#[test]
+fn ardupilot_parameters_equal_ardupilots_own_tool_on_the_same_log() {
+    let tool = ardu_params(
+        &std::fs::read_to_string(repo(
+            "data/autopilot/ardupilot_cubeorangeplus.tempcal-tool.parm",
+        ))
+        .unwrap(),
+    );
+    let ours = tcomp_train::autopilot::from_log(&repo(BIN)).unwrap();
+    assert_eq!(ours.format, "ardupilot");
+    assert!(ours.skipped.is_empty(), "{:?}", ours.skipped);
+    let mine = ardu_params(&ours.text());
+    assert_eq!(mine.len(), 3 * 21);
+    assert_eq!(
+        mine.keys().collect::<Vec<_>>(),
+        tool.keys().collect::<Vec<_>>()
+    );
+    // TMIN/TMAX and ENABLE as printed (%.1f, 1)
+    for (k, v) in tool
+        .iter()
+        .filter(|(k, _)| !k.contains("_ACC") && !k.contains("_GYR"))
+    {
+        assert_eq!(mine[k], *v, "{k}");
+    }
+    // The coefficients: the cubic about 35 °C over 1 °C of data is ill-conditioned (values
+    // to 1e11), so two least-squares solvers (LAPACK's through numpy, nalgebra's SVD) agree to
+    // the conditioning, not to the printed 9 decimals: each coefficient to 1e-8 of its own size
+    // (measured: 4.9e-10), and the correction the firmware applies over [TMIN, TMAX] (the
+    // polynomial's values there) to 1e-6 m/s² and 1e-7 rad/s. Leaving the log's own calibration
+    // in the data (not taking it out first, as the tool does) moves that correction by 2.6e-6
+    // m/s², which this catches.
+    let mut worst = 0.0f64;
+    for (k, v) in tool
+        .iter()
+        .filter(|(k, _)| k.contains("_ACC") || k.contains("_GYR"))
+    {
+        let rel = (mine[k] - v).abs() / v.abs();
+        worst = worst.max(rel);
+        assert!(rel < 1e-8, "{k}: tcomp {}, ArduPilot's tool {v}", mine[k]);
+    }
+    eprintln!("largest relative difference of a coefficient: {worst:e}");
+    for imu in 1..=3 {
+        let lo = tool[&format!("INS_TCAL{imu}_TMIN")];
+        let hi = tool[&format!("INS_TCAL{imu}_TMAX")];
+        for (kind, tol) in [("ACC", 1e-6), ("GYR", 1e-7)] {
+            for axis in ["X", "Y", "Z"] {
+                let poly = |p: &BTreeMap<String, f64>, t: f64| {
+                    (1..=3)
+                        .map(|k| {
+                            p[&format!("INS_TCAL{imu}_{kind}{k}_{axis}")]
+                                * 1e-6
+                                * (t - 35.0).powi(k)
+                        })
+                        .sum::<f64>()
+                };
+                for step in 0..=10 {
+                    let t = lo + (hi - lo) * f64::from(step) / 10.0;
+                    // relative to the value at TMIN: the constant is the offsets' business
+                    let d = (poly(&mine, t) - poly(&mine, lo)) - (poly(&tool, t) - poly(&tool, lo));
+                    assert!(d.abs() < tol, "INS_TCAL{imu} {kind} {axis} at {t}: {d:e}");
+                }
+            }
+        }
+    }
+}
+
 /// A DataFlash record of `kind` with `payload`.
 fn record(kind: u8, payload: &[u8]) -> Vec<u8> {
     [&[0xA3, 0x95, kind][..], payload].concat()
@@ -213,11 +312,29 @@ fn a_damaged_dataflash_log_is_refused_at_its_byte() {
     let dir = tempfile::tempdir().unwrap();
     let mut b = dataflash([0.0, 1e-4, 0.0, 0.0]);
     let p = dir.path().join("cut.bin");
+    let whole = b.clone();
     b.truncate(b.len() - 5);
     std::fs::write(&p, &b).unwrap();
+    // a partial last record (the logger stopped mid-record) is dropped, with a note
+    let d = load(&p, &["IMU[1].GyrX"]).unwrap();
+    let q = dir.path().join("whole.bin");
+    std::fs::write(&q, &whole).unwrap();
+    let n = load(&q, &["IMU[1].GyrX"]).unwrap().len();
+    assert_eq!(d.len() + 1, n);
+    assert!(
+        d.notes()
+            .iter()
+            .any(|s| s.contains("cut.bin") && s.contains("partway through a record at byte")),
+        "{:?}",
+        d.notes()
+    );
+    // damage before the end is refused at its byte: a stray byte after the first records
+    let mut damaged = whole.clone();
+    damaged.insert(89 * 2, 0x00);
+    std::fs::write(&p, &damaged).unwrap();
     let e = Dataset::load(&p).unwrap_err().to_string();
     assert!(
-        e.contains("cut.bin: byte") && e.contains("truncated"),
+        e.contains("cut.bin: byte 178") && e.contains("no record header"),
         "{e}"
     );
     // a record type with no FMT: the IMU's FMT dropped
