@@ -55,11 +55,23 @@ fn model(data: &Dataset, target: &str, reference: Option<&str>, features: &[&str
 fn in_memory(bytes: &[u8], gz: bool, blob: &[u8], o: &StreamOptions) -> Result<String, String> {
     let m = blob_io::decode(std::path::Path::new("m.tcm"), blob).unwrap();
     let run = || -> Result<String, tcomp_train::TrainError> {
-        let mut d = if gz {
+        let d = if gz {
             Dataset::from_gz_reader("log.csv", bytes)?
         } else {
             Dataset::from_reader("log.csv", bytes)?
         };
+        // The policies for repeated or backward time and missing cells, as `tcomp eval` loads.
+        let mut columns = vec![o.roles.target.clone()];
+        columns.extend(o.roles.reference.clone());
+        columns.extend(m.program.inputs.iter().map(|s| s.to_string()));
+        columns.extend(o.temperature.clone());
+        let load = tcomp_train::dataset::LoadOptions {
+            time: Some(o.roles.time.clone()),
+            columns,
+            repeated_time: o.repeated_time,
+            missing: o.missing,
+        };
+        let mut d = tcomp_train::dataset::clean::apply(d, &load)?;
         if o.from.is_some() || o.until.is_some() {
             d = d.select_time(
                 &o.roles.time,
@@ -263,6 +275,13 @@ fn bad_input_gives_the_in_memory_error() {
             }
         }),
     ];
+    // Time going backwards is bad input under `--repeated-time refuse`; under the default it is
+    // handled (as a restart or out-of-order rows), the same way by both paths.
+    let handled = in_memory(&cases[1], false, &blob, &o);
+    assert!(handled.is_ok(), "{handled:?}");
+    assert_eq!(handled, streamed(&cases[1], false, &blob, &o));
+    let mut o = o.clone();
+    o.repeated_time = tcomp_train::dataset::RepeatedTime::Refuse;
     for bytes in &cases {
         let a = in_memory(bytes, false, &blob, &o);
         assert!(a.is_err(), "the case is bad input");
