@@ -50,7 +50,6 @@ fn fit_eval_inspect() {
         "rate(t_coil_c)",
         "--out",
         m,
-        "--quiet",
     ]);
     succeeded(&out);
     let text = String::from_utf8_lossy(&out.stdout);
@@ -58,6 +57,31 @@ fn fit_eval_inspect() {
         text.contains("method      bayes") && text.contains("log evidence"),
         "{text}"
     );
+    // --quiet: the same model, nothing on standard output
+    let quiet = dir.path().join("quiet.tcm");
+    let out = tcomp(&[
+        "fit",
+        "--data",
+        c,
+        "--target",
+        "gyro_dph",
+        "--reference",
+        "ref_dph",
+        "--feature",
+        "t_coil_c",
+        "--feature",
+        "rate(t_coil_c)",
+        "--out",
+        quiet.to_str().unwrap(),
+        "--quiet",
+    ]);
+    succeeded(&out);
+    assert!(
+        out.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    assert_eq!(std::fs::read(&quiet).unwrap(), std::fs::read(m).unwrap());
 
     let out = tcomp(&["eval", "--model", m, "--data", c, "--json", "--quiet"]);
     succeeded(&out);
@@ -146,7 +170,6 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
             "10",
             "--out",
             out.to_str().unwrap(),
-            "--quiet",
         ];
         args.extend_from_slice(extra);
         tcomp(&args)
@@ -205,7 +228,7 @@ fn image_refuses_a_model_the_firmware_cannot_hold() {
             "--axis",
             "x",
             "--unit",
-            "u",
+            "V",
         ],
     );
     succeeded(&out);
@@ -276,7 +299,7 @@ id = 0
 name = "zero"
 sensor = "other"
 axis = "x"
-unit = "u"
+unit = "V"
 counter = 0
 scale = 1.0
 inputs = { a = "ta" }
@@ -285,7 +308,7 @@ id = 3
 name = "three"
 sensor = "other"
 axis = "x"
-unit = "u"
+unit = "V"
 counter = 3
 scale = 1.0
 inputs = { a = "ta", b = "tb", c = "tc" }

@@ -36,8 +36,8 @@ pub struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Quiet: no progress display, no summary and no warnings (errors only; the model is still
-    /// written, and `--json` still prints).
+    /// Quiet: no progress display and no summary (warnings and errors still reach standard
+    /// error; the model is still written, and `--json` still prints).
     #[arg(long)]
     pub quiet: bool,
 }
@@ -86,12 +86,16 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             );
         }
         json::print("fit", &subject, &body)?;
-    } else if !args.quiet {
+    } else {
+        // Warnings (a model the firmware cannot hold, rows a messy file lost) are not chatter:
+        // they reach standard error under --quiet too.
         for w in &s.warnings {
             eprintln!("warning: {w}");
         }
-        let unit = crate::render::num::unit_or_column(&opts.unit, &opts.target);
-        print_summary(s, &args.out, &super::printable::text(&unit));
+        if !args.quiet {
+            let unit = crate::render::num::unit_or_column(&opts.unit, &opts.target);
+            print_summary(s, &args.out, &super::printable::text(&unit));
+        }
     }
     Ok(())
 }
