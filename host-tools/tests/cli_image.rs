@@ -2,6 +2,9 @@
 //! models fitted on the real recording: the wrong channel, a repeated channel and the MEMS models
 //! on the RLG/QMA board are refused (exit ≠ 0, the message names the channel, nothing written);
 //! the same models on the MEMS board succeed and `inspect` lists six channels, each with its model.
+//! Units are parsed, not compared as text: accelerometer models fitted with `--unit m/s2` and
+//! `--unit "m s-2"` pack into the same image, byte for byte, as those fitted with `m/s^2` (the
+//! board's spelling); a gyro fitted in `deg/s` on the `rad/s` channel is refused with the factor.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 use std::path::{Path, PathBuf};
@@ -28,46 +31,60 @@ fn tcomp(dir: &Path, args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// `tcomp fit` of one MEMS channel of the real recording (before 3130 s) into `dir/out`.
+fn fit_channel(dir: &Path, col: &str, sensor: &str, ax: &str, unit: &str, out: &str) {
+    let data = root().join("data/realdata/mems_thermal_cycle.csv");
+    let o = tcomp(
+        dir,
+        &[
+            "fit",
+            "--data",
+            data.to_str().unwrap(),
+            "--target",
+            col,
+            "--reference-value",
+            "0",
+            "--feature",
+            "temp_imu_C",
+            "--sensor",
+            sensor,
+            "--axis",
+            ax,
+            "--unit",
+            unit,
+            "--until",
+            "3130",
+            "--out",
+            out,
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 /// A directory with the six MEMS models (`gx.tcm` … `az.tcm`), fitted once per test process on
 /// the real MEMS cycle before 3130 s.
 fn models() -> &'static Path {
     static DIR: OnceLock<tempfile::TempDir> = OnceLock::new();
     DIR.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
-        let data = root().join("data/realdata/mems_thermal_cycle.csv");
-        let data = data.to_str().unwrap();
         for ax in ["x", "y", "z"] {
-            for (kind, col, sensor, unit) in [
-                ("g", format!("gyro_{ax}_rad_s"), "mems-gyro", "rad/s"),
-                ("a", format!("acc_{ax}_m_s2"), "mems-accel", "m/s^2"),
-            ] {
-                let out = format!("{kind}{ax}.tcm");
-                let o = tcomp(
-                    dir.path(),
-                    &[
-                        "fit",
-                        "--data",
-                        data,
-                        "--target",
-                        &col,
-                        "--reference-value",
-                        "0",
-                        "--feature",
-                        "temp_imu_C",
-                        "--sensor",
-                        sensor,
-                        "--axis",
-                        ax,
-                        "--unit",
-                        unit,
-                        "--until",
-                        "3130",
-                        "--out",
-                        &out,
-                    ],
-                );
-                assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-            }
+            let (g, a) = (format!("gyro_{ax}_rad_s"), format!("acc_{ax}_m_s2"));
+            fit_channel(
+                dir.path(),
+                &g,
+                "mems-gyro",
+                ax,
+                "rad/s",
+                &format!("g{ax}.tcm"),
+            );
+            fit_channel(
+                dir.path(),
+                &a,
+                "mems-accel",
+                ax,
+                "m/s^2",
+                &format!("a{ax}.tcm"),
+            );
         }
         dir
     })
@@ -236,4 +253,83 @@ fn the_board_hash_ignores_comments_and_layout() {
         .replace("sample = 5", "sample = 6");
     std::fs::write(models().join("changed.toml"), changed).unwrap();
     assert_ne!(hash(&b, "h3.bin"), hash("changed.toml", "h4.bin"));
+}
+
+#[test]
+fn one_unit_spelt_three_ways_packs_into_one_image() {
+    let dir = models();
+    fit_channel(dir, "acc_x_m_s2", "mems-accel", "x", "m/s2", "ax-s2.tcm");
+    fit_channel(dir, "acc_y_m_s2", "mems-accel", "y", "m s-2", "ay-s-2.tcm");
+    // The blobs carry the unit as the user spelt it …
+    let o = tcomp(dir, &["inspect", "ay-s-2.tcm", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["unit"], "m s-2", "{v}");
+    // … and the image of the board (`m/s^2`) is the one the `m/s^2` models make.
+    let reference = image("mems6.toml", &[], "spelt-ref.bin");
+    assert!(
+        reference.status.success(),
+        "{}",
+        String::from_utf8_lossy(&reference.stderr)
+    );
+    let b = board("mems6.toml");
+    let mut args = vec![
+        "image",
+        "--board",
+        &b,
+        "--serial",
+        "0x5EED",
+        "--created",
+        "1763900000",
+    ];
+    let mixed = [
+        "0=gx.tcm",
+        "1=gy.tcm",
+        "2=gz.tcm",
+        "3=ax-s2.tcm",
+        "4=ay-s-2.tcm",
+        "5=az.tcm",
+    ];
+    for m in &mixed {
+        args.extend_from_slice(&["--model", m]);
+    }
+    args.extend_from_slice(&["--out", "spelt.bin"]);
+    let o = tcomp(dir, &args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read(dir.join("spelt.bin")).unwrap(),
+        std::fs::read(dir.join("spelt-ref.bin")).unwrap(),
+        "m/s2 and m s-2 models should pack exactly as m/s^2 ones"
+    );
+    let o = tcomp(dir, &["inspect", "spelt.bin", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for c in &v["channels"].as_array().unwrap()[3..6] {
+        assert_eq!(c["model"]["unit"], "m/s^2", "{c}");
+    }
+}
+
+#[test]
+fn a_gyro_in_deg_per_s_on_a_rad_per_s_channel_is_refused_with_the_factor() {
+    let dir = models();
+    fit_channel(dir, "gyro_x_rad_s", "mems-gyro", "x", "deg/s", "gx-deg.tcm");
+    let b = board("mems6.toml");
+    let o = tcomp(
+        dir,
+        &[
+            "image",
+            "--board",
+            &b,
+            "--serial",
+            "1",
+            "--model",
+            "0=gx-deg.tcm",
+            "--out",
+            "deg.bin",
+        ],
+    );
+    refused(
+        &o,
+        "deg.bin",
+        &["gx-deg.tcm", "deg/s", "rad/s", "0.0174532925"],
+    );
 }

@@ -215,15 +215,31 @@ fn check_blob(blob: &ChannelBlob, board: &Board, done: &[Loaded]) -> anyhow::Res
     })
 }
 
-/// `blobs` with each unit compared with its channel's by [`tcomp_train::units`], not as text.
+/// `blobs` with each unit compared with its channel's by [`tcomp_train::units`], not as text: a
+/// model of the channel's sensor kind whose unit is the channel's spelt another way is re-encoded
+/// in the channel's spelling; one in a commensurable unit (`deg/s` on `rad/s`) is refused with
+/// the factor. Any other mismatch is left to [`check_blob`], which names it.
 fn respell_units(board: &Board, blobs: &[ChannelBlob]) -> anyhow::Result<Vec<ChannelBlob>> {
     let rows = board.channel_rows();
     blobs
         .iter()
         .map(|b| {
             let mut b = b.clone();
-            if let Some(row) = rows.iter().find(|r| r.id == b.id)
-                && let Some(bytes) = tcomp_train::units::respell_blob(&b.path, &b.bytes, row.unit)?
+            let Some(row) = rows.iter().find(|r| r.id == b.id) else {
+                return Ok(b);
+            };
+            let Ok(m) = tcomp_train::blob_io::decode(&b.path, &b.bytes) else {
+                return Ok(b);
+            };
+            let unit_only = matches!(
+                row.accepts(&m.meta, m.program.inputs.iter().map(|s| &**s)),
+                Err(Mismatch::Unit)
+            );
+            drop(m);
+            if unit_only
+                && let Some(bytes) =
+                    tcomp_train::units::respell_blob(&b.path, &b.bytes, row.unit)
+                        .with_context(|| format!("{}: channel {} ({})", b.label, b.id, row.name))?
             {
                 b.bytes = bytes;
             }
