@@ -1,0 +1,807 @@
+//! The entry points: version and capacities, validating a blob, loading a blob or an image's
+//! channel into a channel's storage, stepping it, resetting it, and asking it what it runs.
+//!
+//! Each is a thin translation: C pointers become slices (`guard.rs`), the work is one call into
+//! the core ([`Model::decode_into`], [`Image::parse`], [`ChannelRow::accepts`],
+//! [`tcomp_core::Channel::step_dt`], …), and its `Result` becomes an integer code.
+#![allow(unsafe_code)] // C entry points: raw pointers in, `#[unsafe(no_mangle)]` out
+
+use crate::channel::{self, Failure, FfiModel, Row, State, TcompChannel};
+use crate::error::*;
+use crate::guard;
+use crate::out;
+use crate::status::{TCOMP_STATUS_INPUT_FAULT, TCOMP_STATUS_NO_MODEL};
+use core::ffi::c_char;
+use tcomp_core::blob::{FORMAT_VERSION, OLDEST_FORMAT_VERSION};
+use tcomp_core::image::{ChannelRow, Image, VERSION_2};
+use tcomp_core::{FLIGHT_CENTERS, FLIGHT_FEATURES, FLIGHT_NODES, MAX_INPUTS};
+
+/// Version of this C API: raised when a declaration of `tcomp.h` changes incompatibly.
+pub const TCOMP_API_VERSION: u32 = 1;
+/// Most Gaussian centers a loadable model may have (the reference firmware's capacity).
+pub const TCOMP_MAX_CENTERS: usize = 32;
+/// Most features a loadable model may have.
+pub const TCOMP_MAX_FEATURES: usize = 4;
+/// Most feature-program operations a loadable model may have.
+pub const TCOMP_MAX_NODES: usize = 16;
+/// Most named inputs (thermometer columns) a model reads: the length `tcomp_step` may be given.
+pub const TCOMP_MAX_INPUTS: usize = 8;
+
+const _: () = assert!(
+    TCOMP_MAX_CENTERS == FLIGHT_CENTERS
+        && TCOMP_MAX_FEATURES == FLIGHT_FEATURES
+        && TCOMP_MAX_NODES == FLIGHT_NODES
+        && TCOMP_MAX_INPUTS == MAX_INPUTS,
+    "the header's capacities must be the core's flight capacities"
+);
+
+/// The library's version and capacities, for a caller to check at run time that the library it
+/// linked is the one its header describes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TcompCapacities {
+    /// `TCOMP_API_VERSION` of the library.
+    pub api_version: u32,
+    /// `TCOMP_CHANNEL_SIZE` of the library, bytes.
+    pub channel_size: u32,
+    /// `TCOMP_CHANNEL_ALIGN` of the library, bytes.
+    pub channel_align: u32,
+    /// Bytes of the storage the library actually uses on this target (≤ `channel_size`).
+    pub channel_used: u32,
+    /// Most Gaussian centers per model.
+    pub max_centers: u16,
+    /// Most features per model.
+    pub max_features: u16,
+    /// Most feature-program operations per model.
+    pub max_nodes: u16,
+    /// Most input columns per model.
+    pub max_inputs: u16,
+    /// The newest blob format version this library reads.
+    pub blob_format_newest: u16,
+    /// The oldest blob format version this library reads.
+    pub blob_format_oldest: u16,
+    /// The newest calibration-image format version this library reads.
+    pub image_format: u16,
+}
+
+/// One compensated sample.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TcompOutput {
+    /// `raw − correction`, in the unit of the raw value (the model's unit, e.g. deg/h or ug); the
+    /// raw value itself when the status says there is no usable correction.
+    pub compensated: f32,
+    /// The model's estimate of the temperature-induced error, same unit (0 without a model).
+    pub correction: f32,
+    /// `TCOMP_STATUS_*` bits; 0 when all is well.
+    pub status: u16,
+}
+
+/// How a channel loaded from a version-2 calibration image is wired on the board, from the
+/// image's channel table (what the firmware's board description says).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TcompWiring {
+    /// Channel id (the key of its blob in the image).
+    pub channel_id: u16,
+    /// Where the raw value comes from: 0 a pulse counter, 1 a sample source (a register).
+    pub source_kind: u8,
+    /// Index of that counter or sample source on the board.
+    pub source_index: u8,
+    /// Output unit per pulse (counter: arcsec for a gyro, ug·s for an accelerometer, so that
+    /// raw = counts · scale / interval_s gives deg/h or ug) or per LSB (sample source).
+    pub scale: f32,
+    /// Entries of `thermometer` that are set: the model's input count.
+    pub n_inputs: u8,
+    /// For model input `i` (the order `tcomp_step` takes them in), the index of the board
+    /// thermometer that feeds it.
+    pub thermometer: [u8; TCOMP_MAX_INPUTS],
+}
+
+/// The library's version as text (`"0.1.0"`).
+///
+/// Returns a NUL-terminated string in static storage: never NULL, never to be freed.
+/// Thread safety: constant data; callable from anywhere.
+#[unsafe(no_mangle)]
+pub extern "C" fn tcomp_version() -> *const c_char {
+    const VERSION: &core::ffi::CStr = match core::ffi::CStr::from_bytes_with_nul(
+        concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes(),
+    ) {
+        Ok(v) => v,
+        Err(_) => c"",
+    };
+    VERSION.as_ptr()
+}
+
+/// The library's API version, storage size and capacities (see `tcomp_capacities_t`).
+///
+/// Returns the capacities by value. Thread safety: constant data; callable from anywhere.
+#[unsafe(no_mangle)]
+pub extern "C" fn tcomp_capacities() -> TcompCapacities {
+    TcompCapacities {
+        api_version: TCOMP_API_VERSION,
+        channel_size: channel::TCOMP_CHANNEL_SIZE as u32,
+        channel_align: channel::TCOMP_CHANNEL_ALIGN as u32,
+        channel_used: channel::STATE_SIZE as u32,
+        max_centers: TCOMP_MAX_CENTERS as u16,
+        max_features: TCOMP_MAX_FEATURES as u16,
+        max_nodes: TCOMP_MAX_NODES as u16,
+        max_inputs: TCOMP_MAX_INPUTS as u16,
+        blob_format_newest: FORMAT_VERSION,
+        blob_format_oldest: OLDEST_FORMAT_VERSION,
+        image_format: VERSION_2,
+    }
+}
+
+/// Checks a model blob completely (length, magic, CRC-32, version, structure, capacities, values,
+/// plausibility) without keeping it: what a firmware runs before it writes a received blob to
+/// flash.
+///
+/// * `blob`, `blob_len` — the blob's bytes (a `.tcm` file as `tcomp fit` wrote it), borrowed for
+///   the call only. `blob` may be NULL when `blob_len` is 0.
+/// * `why`, `why_len` — optional: a caller's buffer for the core's reason (`why` may be NULL);
+///   NUL-terminated, truncated to fit, `"ok"` when the blob is valid.
+///
+/// Returns `TCOMP_OK`, or the `TCOMP_ERR_BLOB_*` code of the first check that failed
+/// (`TCOMP_ERR_NULL` for a NULL `blob` with `blob_len` > 0).
+/// Decodes on the stack: about 1.5 KB of stack on a Cortex-M4 (use `tcomp_load_blob` into a
+/// channel to decode in place instead). Thread safety: reentrant.
+///
+/// # Safety
+/// `blob` must be NULL or point to `blob_len` readable bytes; `why` NULL or `why_len` writable
+/// bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_validate_blob(
+    blob: *const u8,
+    blob_len: usize,
+    why: *mut c_char,
+    why_len: usize,
+) -> i32 {
+    guard::code(|| {
+        // SAFETY: the caller's contract for `blob`.
+        let Some(bytes) = (unsafe { guard::bytes(blob, blob_len) }) else {
+            return TCOMP_ERR_NULL;
+        };
+        let mut place: Option<FfiModel> = None;
+        let result = FfiModel::decode_into(bytes, &mut place);
+        // SAFETY: the caller's contract for `why`; a NULL `why` means no text is wanted.
+        if let Some(buf) = unsafe { guard::bytes_mut(why.cast(), why_len) } {
+            match &result {
+                Ok(()) => out::display(buf, &"ok"),
+                Err(e) => out::display(buf, e),
+            };
+        }
+        result.map_or_else(|e| blob_code(&e), |()| TCOMP_OK)
+    })
+}
+
+/// Initialises `ch` as a channel without a model: every step passes the raw value through with
+/// `TCOMP_STATUS_NO_MODEL` (what a firmware runs before, or instead of, a valid model).
+///
+/// * `ch` — the caller's storage (`TCOMP_CHANNEL_SIZE` bytes aligned to `TCOMP_CHANNEL_ALIGN`).
+/// * `period_s` — the sampling period in seconds, used by `tcomp_step` (e.g. 0.005 at 200 Hz);
+///   a positive finite number.
+///
+/// Returns `TCOMP_OK`, `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT` or `TCOMP_ERR_ARGUMENT` (bad
+/// period; `ch` is then left as it was). Thread safety: `ch` must not be in use elsewhere.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_channel_init(ch: *mut TcompChannel, period_s: f32) -> i32 {
+    guard::code(|| {
+        if !positive(period_s) {
+            return TCOMP_ERR_ARGUMENT;
+        }
+        // SAFETY: the caller's contract for `ch`.
+        match unsafe { channel::init(ch, period_s) } {
+            Ok(_) => TCOMP_OK,
+            Err(code) => code,
+        }
+    })
+}
+
+/// Decodes a model blob into `ch`, in place, and readies the channel for it (history cleared,
+/// filter coefficients computed for `period_s`). On any error `ch` is still initialised, as by
+/// `tcomp_channel_init`, without a model: stepping it passes raw values through, flagged.
+///
+/// * `ch` — the caller's storage (`TCOMP_CHANNEL_SIZE` bytes aligned to `TCOMP_CHANNEL_ALIGN`);
+///   whatever it held is replaced.
+/// * `blob`, `blob_len` — the blob's bytes, **borrowed, not copied**: the model's names point
+///   into them, so they must stay in place and unchanged (flash, or a static buffer) for as long
+///   as `ch` is used with this model.
+/// * `period_s` — the sampling period in seconds, used by `tcomp_step`; positive and finite.
+///
+/// Returns `TCOMP_OK`, `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_ARGUMENT` (bad period:
+/// `ch` is left as it was) or a `TCOMP_ERR_BLOB_*` code (the reason in full:
+/// `tcomp_channel_describe`). Uses a few hundred bytes of stack (the model is decoded straight
+/// into `ch`). Thread safety: `ch` must not be in use elsewhere.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `blob` NULL or `blob_len`
+/// readable bytes that outlive every later use of `ch` with this model.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_load_blob(
+    ch: *mut TcompChannel,
+    blob: *const u8,
+    blob_len: usize,
+    period_s: f32,
+) -> i32 {
+    guard::code(|| {
+        if !positive(period_s) {
+            return TCOMP_ERR_ARGUMENT;
+        }
+        // SAFETY: the caller's contract: the blob outlives the channel's use of it.
+        let Some(bytes) = (unsafe { guard::bytes::<'static>(blob, blob_len) }) else {
+            return TCOMP_ERR_NULL;
+        };
+        // SAFETY: the caller's contract for `ch`.
+        let state = match unsafe { channel::init(ch, period_s) } {
+            Ok(s) => s,
+            Err(code) => return code,
+        };
+        let loaded = load_blob(state, bytes);
+        finish_load(state, loaded)
+    })
+}
+
+/// Loads channel `channel_id`'s model from a calibration image (as `tcomp image` writes it and
+/// the board's model slot holds it) into `ch`: the whole image is checked (CRC, rows, board hash),
+/// then optionally its unit and board, then the channel's blob is decoded in place and, for a
+/// version-2 image, checked against the channel's row (sensor kind, axis, unit, every input
+/// column wired to a thermometer); the row's wiring is kept (`tcomp_channel_wiring`). On any
+/// error `ch` is initialised without a model, as by `tcomp_channel_init`.
+///
+/// * `ch` — the caller's storage; whatever it held is replaced.
+/// * `image`, `image_len` — the image's bytes (a whole flash slot may be given: bytes past the
+///   image are ignored), **borrowed, not copied**: they must stay in place and unchanged while
+///   `ch` is used with this model.
+/// * `channel_id` — the channel's id in the image (the board description's `id`).
+/// * `unit_serial` — optional: NULL, or the unit's serial number; an image made for another unit
+///   is refused (`TCOMP_ERR_IMAGE_OTHER_UNIT`).
+/// * `board_hash` — optional: NULL, or the FNV-1a 64 hash of the board description the firmware
+///   was written for (`tcomp inspect` prints an image's); an image for another description is
+///   refused (`TCOMP_ERR_IMAGE_BOARD_HASH`).
+/// * `period_s` — the sampling period in seconds; positive and finite.
+///
+/// Returns `TCOMP_OK`, `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_ARGUMENT` (bad period:
+/// `ch` is left as it was), a `TCOMP_ERR_IMAGE_*` or a `TCOMP_ERR_BLOB_*` code (in full:
+/// `tcomp_channel_describe`). Thread safety: `ch` must not be in use elsewhere; the image may be
+/// shared by several channels (read only).
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `image` NULL or `image_len`
+/// readable bytes that outlive every later use of `ch` with this model; `unit_serial` and
+/// `board_hash` NULL or pointing to a readable `uint64_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_load_image(
+    ch: *mut TcompChannel,
+    image: *const u8,
+    image_len: usize,
+    channel_id: u16,
+    unit_serial: *const u64,
+    board_hash: *const u64,
+    period_s: f32,
+) -> i32 {
+    guard::code(|| {
+        if !positive(period_s) {
+            return TCOMP_ERR_ARGUMENT;
+        }
+        // SAFETY: the caller's contract: the image outlives the channel's use of it.
+        let Some(bytes) = (unsafe { guard::bytes::<'static>(image, image_len) }) else {
+            return TCOMP_ERR_NULL;
+        };
+        // SAFETY: the caller's contract: NULL or a readable u64.
+        let (serial, hash) = unsafe { (optional(unit_serial), optional(board_hash)) };
+        // SAFETY: the caller's contract for `ch`.
+        let state = match unsafe { channel::init(ch, period_s) } {
+            Ok(s) => s,
+            Err(code) => return code,
+        };
+        let loaded = load_image(state, bytes, channel_id, serial, hash);
+        finish_load(state, loaded)
+    })
+}
+
+/// Decodes `bytes` into the state's model slot.
+fn load_blob(state: &mut State, bytes: &'static [u8]) -> Result<(), Failure> {
+    FfiModel::decode_into(bytes, &mut state.model).map_err(Failure::Blob)
+}
+
+/// The image checks, the blob, and the row (see [`tcomp_load_image`]).
+fn load_image(
+    state: &mut State,
+    bytes: &'static [u8],
+    id: u16,
+    serial: Option<u64>,
+    hash: Option<u64>,
+) -> Result<(), Failure> {
+    let image = Image::parse(bytes).map_err(Failure::Image)?;
+    if let Some(serial) = serial {
+        image.check_unit(serial).map_err(Failure::Image)?;
+    }
+    if let (Some(h), Some(expected)) = (image.header(), hash)
+        && h.board_hash != expected
+    {
+        return Err(Failure::OtherBoard);
+    }
+    let blob = image.blob(id).map_err(Failure::Image)?;
+    load_blob(state, blob)?;
+    if image.version() < VERSION_2 {
+        return Ok(());
+    }
+    let row = image.channel_by_id(id).ok_or(Failure::NotInTable)?;
+    let model = state.model.as_ref().ok_or(Failure::NotInTable)?;
+    row.accepts(&model.meta, model.program.inputs.iter().map(|s| &**s))
+        .map_err(|_| Failure::WrongChannel)?;
+    state.row = Some(wiring(&row, model));
+    Ok(())
+}
+
+/// The row's source, scale and, per model input, the thermometer `ChannelRow::thermometer_for`
+/// names (every input has one: `accepts` checked it).
+fn wiring(row: &ChannelRow<'_>, model: &FfiModel) -> Row {
+    let mut thermometer = [0u8; MAX_INPUTS];
+    for (t, name) in thermometer.iter_mut().zip(model.program.inputs.iter()) {
+        *t = row.thermometer_for(name).unwrap_or(u8::MAX);
+    }
+    Row {
+        id: row.id,
+        source: row.source.code(),
+        scale: row.scale,
+        thermometer,
+    }
+}
+
+/// Records a load's outcome: on success readies the channel for the model; on failure clears the
+/// model and keeps the reason.
+fn finish_load(state: &mut State, loaded: Result<(), Failure>) -> i32 {
+    match (loaded, &state.model) {
+        (Ok(()), Some(model)) => {
+            state.channel.prepare(model);
+            TCOMP_OK
+        }
+        (Ok(()), None) => TCOMP_ERR_BLOB_OTHER,
+        (Err(failure), _) => {
+            state.model = None;
+            state.row = None;
+            state.failure = failure;
+            failure_code(&failure)
+        }
+    }
+}
+
+fn failure_code(f: &Failure) -> i32 {
+    match f {
+        Failure::None => TCOMP_OK,
+        Failure::Blob(e) => blob_code(e),
+        Failure::Image(e) => image_code(e),
+        Failure::OtherBoard => TCOMP_ERR_IMAGE_BOARD_HASH,
+        Failure::NotInTable => TCOMP_ERR_IMAGE_NOT_IN_TABLE,
+        Failure::WrongChannel => TCOMP_ERR_IMAGE_WRONG_CHANNEL,
+    }
+}
+
+/// One sample at the channel's period (the `period_s` it was loaded with): what a fixed-rate
+/// firmware loop calls once per channel per period. Periods the loop missed are announced
+/// beforehand with `tcomp_skip`.
+///
+/// * `ch` — an initialised channel.
+/// * `inputs`, `n_inputs` — the model's input columns for this sample, in the model's order
+///   (`tcomp_channel_input_name`; for an image, `tcomp_channel_wiring` says which thermometer
+///   feeds each), in the columns' units (°C for the `t_*_c` thermometers `tcomp fit` was trained
+///   on). Borrowed for the call. `n_inputs` must be the model's input count
+///   (`tcomp_channel_input_count`); a channel without a model ignores them (NULL allowed). A
+///   NaN or infinite input is a fault the step handles (flagged `TCOMP_STATUS_INPUT_FAULT`, last
+///   good features held), not an error.
+/// * `raw` — the sensor's raw value for this sample in the model's unit (deg/h, ug, …).
+/// * `out` — where the sample goes (caller-owned).
+///
+/// Returns `TCOMP_OK`; `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT` or `TCOMP_ERR_UNINITIALISED`;
+/// `TCOMP_ERR_INPUT_COUNT` (the channel does not advance). Whenever `out` is not NULL it is
+/// written: on an error with the raw value passed through, flagged `TCOMP_STATUS_INPUT_FAULT`
+/// (and `TCOMP_STATUS_NO_MODEL` for a channel that cannot be read), so no NaN or unchecked value
+/// ever leaves with status 0. Bounded time, no allocation. Thread safety: `ch` must not be in use
+/// elsewhere.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `inputs` NULL or `n_inputs`
+/// readable floats; `out` NULL or a writable `tcomp_output_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_step(
+    ch: *mut TcompChannel,
+    inputs: *const f32,
+    n_inputs: usize,
+    raw: f32,
+    out: *mut TcompOutput,
+) -> i32 {
+    // SAFETY: the caller's contracts, passed on.
+    unsafe { step(ch, inputs, n_inputs, None, false, raw, out) }
+}
+
+/// One sample `dt_s` seconds after the previous one: what a host replaying a log, or a firmware
+/// with its own timestamps, calls.
+///
+/// * `ch`, `inputs`, `n_inputs`, `raw`, `out` — as for `tcomp_step`.
+/// * `dt_s` — seconds since the previous sample (ignored on the first sample after a load or a
+///   reset). A `dt_s` that is not a positive finite number is a data fault, handled as a NaN input
+///   is (flagged, and the time carried to the next good step).
+/// * `gap` — nonzero when this sample follows a gap in the record (a logger dropout, a pause):
+///   `dt_s` then spans the whole gap, and the feature program's filters are carried across it as
+///   for inputs that moved linearly (the core's `Channel::mark_gap`), or restarted when the gap is
+///   far longer than their time constants; zero for an ordinary sample.
+///
+/// Returns and writes `out` as `tcomp_step` does. Thread safety: as `tcomp_step`.
+///
+/// # Safety
+/// As `tcomp_step`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_step_dt(
+    ch: *mut TcompChannel,
+    inputs: *const f32,
+    n_inputs: usize,
+    dt_s: f32,
+    gap: bool,
+    raw: f32,
+    out: *mut TcompOutput,
+) -> i32 {
+    // SAFETY: the caller's contracts, passed on.
+    unsafe { step(ch, inputs, n_inputs, Some(dt_s), gap, raw, out) }
+}
+
+/// The two steps' body: checks, then one call of the core's `Channel::step` or `step_dt`.
+///
+/// # Safety
+/// As [`tcomp_step`].
+unsafe fn step(
+    ch: *mut TcompChannel,
+    inputs: *const f32,
+    n_inputs: usize,
+    dt_s: Option<f32>,
+    gap: bool,
+    raw: f32,
+    out: *mut TcompOutput,
+) -> i32 {
+    if out.is_null() || !out.is_aligned() {
+        return if out.is_null() {
+            TCOMP_ERR_NULL
+        } else {
+            TCOMP_ERR_ALIGNMENT
+        };
+    }
+    let refused = |status: u16| TcompOutput {
+        compensated: raw,
+        correction: 0.0,
+        status,
+    };
+    let (code, sample) = guard::value(
+        (
+            TCOMP_ERR_PANIC,
+            refused(TCOMP_STATUS_NO_MODEL | TCOMP_STATUS_INPUT_FAULT),
+        ),
+        || {
+            // SAFETY: the caller's contract for `ch`.
+            unsafe {
+                channel::with(
+                    ch,
+                    |code| {
+                        (
+                            code,
+                            refused(TCOMP_STATUS_NO_MODEL | TCOMP_STATUS_INPUT_FAULT),
+                        )
+                    },
+                    |state| {
+                        // SAFETY: the caller's contract for `inputs`.
+                        let Some(inputs) = guard::floats(inputs, n_inputs) else {
+                            return (TCOMP_ERR_NULL, refused(TCOMP_STATUS_INPUT_FAULT));
+                        };
+                        let model = state.model.as_ref();
+                        if model.is_some_and(|m| m.program.inputs.len() != inputs.len()) {
+                            return (TCOMP_ERR_INPUT_COUNT, refused(TCOMP_STATUS_INPUT_FAULT));
+                        }
+                        let o = match dt_s {
+                            None => state.channel.step(model, inputs, raw),
+                            Some(dt) => {
+                                if gap {
+                                    state.channel.mark_gap();
+                                }
+                                state.channel.step_dt(model, inputs, dt, raw)
+                            }
+                        };
+                        let sample = TcompOutput {
+                            compensated: o.compensated,
+                            correction: o.correction,
+                            status: u16::from(o.status.0),
+                        };
+                        (TCOMP_OK, sample)
+                    },
+                )
+            }
+        },
+    );
+    // SAFETY: `out` is non-NULL and aligned (checked above) and the caller's to write.
+    unsafe { out.write(sample) };
+    code
+}
+
+/// `seconds` passed without a sample (timer periods the loop missed): the next `tcomp_step`
+/// covers them too, as a gap across which the feature program's filters are carried (the core's
+/// `Channel::skip`). Costs the ordinary samples nothing.
+///
+/// * `ch` — an initialised channel.
+/// * `seconds` — the time missed, in seconds: finite and ≥ 0 (0 does nothing).
+///
+/// Returns `TCOMP_OK`, `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED` or
+/// `TCOMP_ERR_ARGUMENT`. Thread safety: `ch` must not be in use elsewhere.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_skip(ch: *mut TcompChannel, seconds: f32) -> i32 {
+    guard::code(|| {
+        if !(seconds.is_finite() && seconds >= 0.0) {
+            return TCOMP_ERR_ARGUMENT;
+        }
+        // SAFETY: the caller's contract for `ch`.
+        unsafe {
+            channel::with(
+                ch,
+                |c| c,
+                |s| {
+                    s.channel.skip(seconds);
+                    TCOMP_OK
+                },
+            )
+        }
+    })
+}
+
+/// Forgets the channel's history (the feature program's filters, the held features): the next
+/// sample is treated as the first. Keeps the model, the period and the time since power-on.
+///
+/// Returns `TCOMP_OK`, `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT` or `TCOMP_ERR_UNINITIALISED`.
+/// Thread safety: `ch` must not be in use elsewhere.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_reset(ch: *mut TcompChannel) -> i32 {
+    guard::code(|| {
+        // SAFETY: the caller's contract for `ch`.
+        unsafe {
+            channel::with(
+                ch,
+                |c| c,
+                |s| {
+                    s.channel.reset();
+                    if let Some(model) = &s.model {
+                        s.channel.prepare(model);
+                    }
+                    TCOMP_OK
+                },
+            )
+        }
+    })
+}
+
+/// Sets the time since power-on, in seconds, of the channel's next first sample (after a load
+/// or a reset): where a model's `warmup(...)` feature starts counting. A firmware leaves it at 0
+/// (its channels start at boot); a host replaying a log sets the time between the instrument's
+/// power-on and the log's first row.
+///
+/// * `seconds` — finite (may be negative for a log that starts before power-on).
+///
+/// Returns `TCOMP_OK`, `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED` or
+/// `TCOMP_ERR_ARGUMENT`. Thread safety: `ch` must not be in use elsewhere.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_set_time_on(ch: *mut TcompChannel, seconds: f32) -> i32 {
+    guard::code(|| {
+        if !seconds.is_finite() {
+            return TCOMP_ERR_ARGUMENT;
+        }
+        // SAFETY: the caller's contract for `ch`.
+        unsafe {
+            channel::with(
+                ch,
+                |c| c,
+                |s| {
+                    s.channel.set_time_on(seconds);
+                    TCOMP_OK
+                },
+            )
+        }
+    })
+}
+
+/// Whether the channel has a model: 1 yes, 0 no (never loaded, or the load failed), or a
+/// negative error code (`TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`).
+/// Thread safety: `ch` must not be written concurrently.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_channel_has_model(ch: *const TcompChannel) -> i32 {
+    guard::code(|| {
+        // SAFETY: the caller's contract for `ch`; the body only reads.
+        unsafe { channel::with(ch.cast_mut(), |c| c, |s| i32::from(s.model.is_some())) }
+    })
+}
+
+/// The number of input columns the channel's model reads (what `n_inputs` of a step must be):
+/// ≥ 0, 0 without a model, or a negative error code as for `tcomp_channel_has_model`.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_channel_input_count(ch: *const TcompChannel) -> i32 {
+    guard::code(|| {
+        // SAFETY: the caller's contract for `ch`; the body only reads.
+        unsafe {
+            channel::with(
+                ch.cast_mut(),
+                |c| c,
+                |s| {
+                    s.model
+                        .as_ref()
+                        .map_or(0, |m| m.program.inputs.len() as i32)
+                },
+            )
+        }
+    })
+}
+
+/// Writes the name of the model's input column `index` (e.g. `"t_anode_c"`, as in the training
+/// CSV's header) into `buf`, NUL-terminated and truncated to fit.
+///
+/// * `index` — 0 ≤ `index` < `tcomp_channel_input_count(ch)`.
+/// * `buf`, `buf_len` — the caller's buffer; `buf` may be NULL when `buf_len` is 0 (to ask for the
+///   length).
+///
+/// Returns the name's length without the NUL (`snprintf`-style), `TCOMP_ERR_INDEX` past the
+/// inputs (or without a model), or `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`,
+/// `TCOMP_ERR_UNINITIALISED`. Thread safety: `ch` must not be written concurrently.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `buf` NULL or `buf_len`
+/// writable bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_channel_input_name(
+    ch: *const TcompChannel,
+    index: usize,
+    buf: *mut c_char,
+    buf_len: usize,
+) -> i32 {
+    guard::code(|| {
+        // SAFETY: the caller's contract for `buf`.
+        let Some(buf) = (unsafe { guard::bytes_mut(buf.cast(), buf_len) }) else {
+            return TCOMP_ERR_NULL;
+        };
+        // SAFETY: the caller's contract for `ch`; the body only reads it.
+        unsafe {
+            channel::with(
+                ch.cast_mut(),
+                |c| c,
+                |s| match s.model.as_ref().and_then(|m| m.program.inputs.get(index)) {
+                    Some(name) => len_code(out::display(buf, &&**name)),
+                    None => TCOMP_ERR_INDEX,
+                },
+            )
+        }
+    })
+}
+
+/// Copies the wiring of a channel loaded from a version-2 image (`tcomp_load_image`) into
+/// `wiring`: which counter or sample source gives its raw value, with which scale, and which
+/// board thermometer feeds each model input.
+///
+/// Returns `TCOMP_OK`; `TCOMP_ERR_INDEX` when the channel has no image row (loaded from a bare
+/// blob, from a version-1 image, or without a model; `wiring` is then zeroed); or
+/// `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`. Thread safety: `ch` must
+/// not be written concurrently.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `wiring` NULL or a writable
+/// `tcomp_wiring_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_channel_wiring(
+    ch: *const TcompChannel,
+    wiring: *mut TcompWiring,
+) -> i32 {
+    guard::code(|| {
+        if wiring.is_null() || !wiring.is_aligned() {
+            return if wiring.is_null() {
+                TCOMP_ERR_NULL
+            } else {
+                TCOMP_ERR_ALIGNMENT
+            };
+        }
+        // SAFETY: the caller's contract for `ch`; the body only reads it.
+        let (code, value) = unsafe {
+            channel::with(
+                ch.cast_mut(),
+                |c| (c, TcompWiring::default()),
+                |s| match (&s.row, &s.model) {
+                    (Some(row), Some(model)) => (
+                        TCOMP_OK,
+                        TcompWiring {
+                            channel_id: row.id,
+                            source_kind: row.source.0,
+                            source_index: row.source.1,
+                            scale: row.scale,
+                            n_inputs: model.program.inputs.len() as u8,
+                            thermometer: row.thermometer,
+                        },
+                    ),
+                    _ => (TCOMP_ERR_INDEX, TcompWiring::default()),
+                },
+            )
+        };
+        // SAFETY: non-NULL, aligned, the caller's to write.
+        unsafe { wiring.write(value) };
+        code
+    })
+}
+
+/// Writes what the channel runs, or why its last load failed, into `buf` (the core's own
+/// message, e.g. `"blob refused: inconsistent field ranges: one per feature"`;
+/// `"ok"` after a successful load, `"no model"` after `tcomp_channel_init`), NUL-terminated and
+/// truncated to fit.
+///
+/// * `buf`, `buf_len` — the caller's buffer; `buf` may be NULL when `buf_len` is 0.
+///
+/// Returns the text's length without the NUL (`snprintf`-style), or `TCOMP_ERR_NULL`,
+/// `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`. 160 bytes hold every message.
+/// Thread safety: `ch` must not be written concurrently.
+///
+/// # Safety
+/// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `buf` NULL or `buf_len`
+/// writable bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn tcomp_channel_describe(
+    ch: *const TcompChannel,
+    buf: *mut c_char,
+    buf_len: usize,
+) -> i32 {
+    guard::code(|| {
+        // SAFETY: the caller's contract for `buf`.
+        let Some(buf) = (unsafe { guard::bytes_mut(buf.cast(), buf_len) }) else {
+            return TCOMP_ERR_NULL;
+        };
+        // SAFETY: the caller's contract for `ch`; the body only reads it.
+        unsafe {
+            channel::with(
+                ch.cast_mut(),
+                |c| c,
+                |s| match (&s.failure, &s.model) {
+                    (Failure::None, None) => len_code(out::display(buf, &"no model")),
+                    (f, _) => len_code(out::display(buf, f)),
+                },
+            )
+        }
+    })
+}
+
+/// A text length as a return value.
+fn len_code(n: usize) -> i32 {
+    i32::try_from(n).unwrap_or(i32::MAX)
+}
+
+/// A positive finite number of seconds.
+fn positive(s: f32) -> bool {
+    s.is_finite() && s > 0.0
+}
+
+/// `None` for NULL, else the `u64` at `p` (read unaligned: a C caller may pack it anywhere).
+///
+/// # Safety
+/// `p` must be NULL or point to 8 readable bytes.
+unsafe fn optional(p: *const u64) -> Option<u64> {
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: non-NULL and readable by the caller's contract; no alignment is assumed.
+    Some(unsafe { p.read_unaligned() })
+}
