@@ -247,17 +247,6 @@ typedef struct TCOMP_ALIGNED(8) {
   uint8_t opaque[TCOMP_CHANNEL_SIZE];
 } tcomp_channel_t;
 
-// One compensated sample.
-typedef struct {
-  // `raw − correction`, in the unit of the raw value (the model's unit, e.g. deg/h or ug); the
-  // raw value itself when the status says there is no usable correction.
-  float compensated;
-  // The model's estimate of the temperature-induced error, same unit (0 without a model).
-  float correction;
-  // `TCOMP_STATUS_*` bits; 0 when all is well.
-  uint16_t status;
-} tcomp_output_t;
-
 // How a channel loaded from a version-2 calibration image is wired on the board, from the
 // image's channel table (what the firmware's board description says).
 typedef struct {
@@ -276,6 +265,62 @@ typedef struct {
   // thermometer that feeds it.
   uint8_t thermometer[TCOMP_MAX_INPUTS];
 } tcomp_wiring_t;
+
+// A string borrowed from a channel's blob: `len` bytes of UTF-8 at `ptr`, **not NUL-terminated**
+// (print it with `printf("%.*s", (int)s.len, s.ptr)`). Valid while the blob stays in place and
+// the channel keeps this model; `ptr` is never NULL (an empty string has `len` 0).
+typedef struct {
+  // The first byte.
+  const char *ptr;
+  // Bytes.
+  size_t len;
+} tcomp_str_t;
+
+// What a channel's model is, from its blob's metadata (`tcomp inspect` prints the same).
+typedef struct {
+  // The instrument: 0 RLG, 1 quartz accelerometer, 2 IFOG, 3 MEMS gyro, 4 MEMS
+  // accelerometer, 5 other (the calibration image's codes).
+  uint8_t sensor;
+  // Features the model evaluates.
+  uint8_t n_features;
+  // Input columns it reads (what a step's `n_inputs` must be).
+  uint8_t n_inputs;
+  // Gaussian centers.
+  uint16_t n_centers;
+  // The blob's format version.
+  uint16_t format_version;
+  // Axis label (`x`, `y`, `z`).
+  tcomp_str_t axis;
+  // Unit of the raw value, the correction and the output (`deg/h`, `ug`).
+  tcomp_str_t unit;
+  // Training method (`bayes`, `poly3`, …).
+  tcomp_str_t method;
+  // The training CSV's time column (seconds).
+  tcomp_str_t time_column;
+  // The training CSV's sensor-output column.
+  tcomp_str_t target_column;
+  // The training CSV's reference column; empty when a constant was used.
+  tcomp_str_t reference_column;
+  // The constant reference, in the model's unit; NaN when a column was used.
+  float reference_value;
+  // What data it was trained on (file and time window).
+  tcomp_str_t trained_on;
+  // Training samples.
+  uint32_t train_samples;
+  // Residual standard deviation seen on held-out data when the model was made (model unit).
+  float residual_std;
+} tcomp_meta_t;
+
+// One compensated sample.
+typedef struct {
+  // `raw − correction`, in the unit of the raw value (the model's unit, e.g. deg/h or ug); the
+  // raw value itself when the status says there is no usable correction.
+  float compensated;
+  // The model's estimate of the temperature-induced error, same unit (0 without a model).
+  float correction;
+  // `TCOMP_STATUS_*` bits; 0 when all is well.
+  uint16_t status;
+} tcomp_output_t;
 
 
 
@@ -384,6 +429,112 @@ int32_t tcomp_load_image(tcomp_channel_t *ch,
                          const uint64_t *board_hash,
                          float period_s);
 
+// The name of error code `code` (`"TCOMP_ERR_BLOB_CHECKSUM"`), or `"TCOMP_ERR_UNKNOWN"` for a
+// code this library does not define.
+//
+// Returns a NUL-terminated string in static storage: never NULL, never to be freed.
+// Thread safety: reads constant data only; callable from any thread or interrupt.
+const char *tcomp_error_name(int32_t code);
+
+// Defined by the application (see `tcomp.h`): `file` (not NUL-terminated, `file_len`
+// bytes) and `line` of the panic in tcomp's sources.
+extern void tcomp_panic_hook(const uint8_t *file, size_t file_len, uint32_t line);
+
+// Whether the channel has a model: 1 yes, 0 no (never loaded, or the load failed), or a
+// negative error code (`TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`).
+// Thread safety: `ch` must not be written concurrently.
+//
+// # Safety
+// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
+int32_t tcomp_channel_has_model(const tcomp_channel_t *ch);
+
+// The number of input columns the channel's model reads (what `n_inputs` of a step must be):
+// ≥ 0, 0 without a model, or a negative error code as for `tcomp_channel_has_model`.
+//
+// # Safety
+// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
+int32_t tcomp_channel_input_count(const tcomp_channel_t *ch);
+
+// Writes the name of the model's input column `index` (e.g. `"t_anode_c"`, as in the training
+// CSV's header) into `buf`, NUL-terminated and truncated to fit.
+//
+// * `index` — 0 ≤ `index` < `tcomp_channel_input_count(ch)`.
+// * `buf`, `buf_len` — the caller's buffer; `buf` may be NULL when `buf_len` is 0 (to ask for the
+//   length).
+//
+// Returns the name's length without the NUL (`snprintf`-style), `TCOMP_ERR_INDEX` past the
+// inputs (or without a model), or `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`,
+// `TCOMP_ERR_UNINITIALISED`. Thread safety: `ch` must not be written concurrently.
+//
+// # Safety
+// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `buf` NULL or `buf_len`
+// writable bytes.
+int32_t tcomp_channel_input_name(const tcomp_channel_t *ch,
+                                 size_t index,
+                                 char *buf,
+                                 size_t buf_len);
+
+// Copies the wiring of a channel loaded from a version-2 image (`tcomp_load_image`) into
+// `wiring`: which counter or sample source gives its raw value, with which scale, and which
+// board thermometer feeds each model input.
+//
+// Returns `TCOMP_OK`; `TCOMP_ERR_INDEX` when the channel has no image row (loaded from a bare
+// blob, from a version-1 image, or without a model; `wiring` is then zeroed); or
+// `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`. Thread safety: `ch` must
+// not be written concurrently.
+//
+// # Safety
+// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `wiring` NULL or a writable
+// `tcomp_wiring_t`.
+int32_t tcomp_channel_wiring(const tcomp_channel_t *ch, tcomp_wiring_t *wiring);
+
+// Writes what the channel runs, or why its last load failed, into `buf` (the core's own
+// message, e.g. `"blob refused: inconsistent field ranges: one per feature"`;
+// `"ok"` after a successful load, `"no model"` after `tcomp_channel_init`), NUL-terminated and
+// truncated to fit.
+//
+// * `buf`, `buf_len` — the caller's buffer; `buf` may be NULL when `buf_len` is 0.
+//
+// Returns the text's length without the NUL (`snprintf`-style), or `TCOMP_ERR_NULL`,
+// `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`. 160 bytes hold every message.
+// Thread safety: `ch` must not be written concurrently.
+//
+// # Safety
+// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `buf` NULL or `buf_len`
+// writable bytes.
+int32_t tcomp_channel_describe(const tcomp_channel_t *ch, char *buf, size_t buf_len);
+
+// Copies the channel's model metadata into `meta`; its strings are borrowed from the blob.
+//
+// Returns `TCOMP_OK`; `TCOMP_ERR_INDEX` when the channel has no model (`meta` untouched); or
+// `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`. Thread safety: `ch` must
+// not be written concurrently.
+//
+// # Safety
+// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `meta` NULL or a writable
+// `tcomp_meta_t`.
+int32_t tcomp_channel_meta(const tcomp_channel_t *ch, tcomp_meta_t *meta);
+
+// Writes the names of the set bits of `status`, lowest bit first, joined by `+`
+// (`"no-model+input-fault"`; `"ok"` for 0; a bit without a name as `bit<n>`), from the core's
+// table of status names, which also names the firmware's loop and board bits.
+//
+// * `status` — a status word (the `status` of a `tcomp_output_t`, possibly with the firmware's own
+//   bits added).
+// * `buf` — where the text goes, owned by the caller; may be NULL when `buf_len` is 0. At most
+//   `buf_len` bytes are written, always NUL-terminated when `buf_len` > 0 (truncated if need be).
+// * `buf_len` — bytes available at `buf`.
+//
+// Returns the length of the whole text without its NUL (`snprintf`-style: a result ≥ `buf_len`
+// means it was truncated), or `TCOMP_ERR_NULL` when `buf` is NULL and `buf_len` > 0.
+// Thread safety: reentrant; touches only `buf`. 160 bytes hold any word.
+//
+// # Safety
+// `buf` must be NULL or point to `buf_len` writable bytes.
+int32_t tcomp_status_describe(uint16_t status,
+                              char *buf,
+                              size_t buf_len);
+
 // One sample at the channel's period (the `period_s` it was loaded with): what a fixed-rate
 // firmware loop calls once per channel per period. Periods the loop missed are announced
 // beforehand with `tcomp_skip`.
@@ -476,101 +627,6 @@ int32_t tcomp_reset(tcomp_channel_t *ch);
 // # Safety
 // `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
 int32_t tcomp_set_time_on(tcomp_channel_t *ch, float seconds);
-
-// Whether the channel has a model: 1 yes, 0 no (never loaded, or the load failed), or a
-// negative error code (`TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`).
-// Thread safety: `ch` must not be written concurrently.
-//
-// # Safety
-// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
-int32_t tcomp_channel_has_model(const tcomp_channel_t *ch);
-
-// The number of input columns the channel's model reads (what `n_inputs` of a step must be):
-// ≥ 0, 0 without a model, or a negative error code as for `tcomp_channel_has_model`.
-//
-// # Safety
-// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns.
-int32_t tcomp_channel_input_count(const tcomp_channel_t *ch);
-
-// Writes the name of the model's input column `index` (e.g. `"t_anode_c"`, as in the training
-// CSV's header) into `buf`, NUL-terminated and truncated to fit.
-//
-// * `index` — 0 ≤ `index` < `tcomp_channel_input_count(ch)`.
-// * `buf`, `buf_len` — the caller's buffer; `buf` may be NULL when `buf_len` is 0 (to ask for the
-//   length).
-//
-// Returns the name's length without the NUL (`snprintf`-style), `TCOMP_ERR_INDEX` past the
-// inputs (or without a model), or `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`,
-// `TCOMP_ERR_UNINITIALISED`. Thread safety: `ch` must not be written concurrently.
-//
-// # Safety
-// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `buf` NULL or `buf_len`
-// writable bytes.
-int32_t tcomp_channel_input_name(const tcomp_channel_t *ch,
-                                 size_t index,
-                                 char *buf,
-                                 size_t buf_len);
-
-// Copies the wiring of a channel loaded from a version-2 image (`tcomp_load_image`) into
-// `wiring`: which counter or sample source gives its raw value, with which scale, and which
-// board thermometer feeds each model input.
-//
-// Returns `TCOMP_OK`; `TCOMP_ERR_INDEX` when the channel has no image row (loaded from a bare
-// blob, from a version-1 image, or without a model; `wiring` is then zeroed); or
-// `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`. Thread safety: `ch` must
-// not be written concurrently.
-//
-// # Safety
-// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `wiring` NULL or a writable
-// `tcomp_wiring_t`.
-int32_t tcomp_channel_wiring(const tcomp_channel_t *ch, tcomp_wiring_t *wiring);
-
-// Writes what the channel runs, or why its last load failed, into `buf` (the core's own
-// message, e.g. `"blob refused: inconsistent field ranges: one per feature"`;
-// `"ok"` after a successful load, `"no model"` after `tcomp_channel_init`), NUL-terminated and
-// truncated to fit.
-//
-// * `buf`, `buf_len` — the caller's buffer; `buf` may be NULL when `buf_len` is 0.
-//
-// Returns the text's length without the NUL (`snprintf`-style), or `TCOMP_ERR_NULL`,
-// `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_UNINITIALISED`. 160 bytes hold every message.
-// Thread safety: `ch` must not be written concurrently.
-//
-// # Safety
-// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `buf` NULL or `buf_len`
-// writable bytes.
-int32_t tcomp_channel_describe(const tcomp_channel_t *ch, char *buf, size_t buf_len);
-
-// The name of error code `code` (`"TCOMP_ERR_BLOB_CHECKSUM"`), or `"TCOMP_ERR_UNKNOWN"` for a
-// code this library does not define.
-//
-// Returns a NUL-terminated string in static storage: never NULL, never to be freed.
-// Thread safety: reads constant data only; callable from any thread or interrupt.
-const char *tcomp_error_name(int32_t code);
-
-// Defined by the application (see `tcomp.h`): `file` (not NUL-terminated, `file_len`
-// bytes) and `line` of the panic in tcomp's sources.
-extern void tcomp_panic_hook(const uint8_t *file, size_t file_len, uint32_t line);
-
-// Writes the names of the set bits of `status`, lowest bit first, joined by `+`
-// (`"no-model+input-fault"`; `"ok"` for 0; a bit without a name as `bit<n>`), from the core's
-// table of status names, which also names the firmware's loop and board bits.
-//
-// * `status` — a status word (the `status` of a `tcomp_output_t`, possibly with the firmware's own
-//   bits added).
-// * `buf` — where the text goes, owned by the caller; may be NULL when `buf_len` is 0. At most
-//   `buf_len` bytes are written, always NUL-terminated when `buf_len` > 0 (truncated if need be).
-// * `buf_len` — bytes available at `buf`.
-//
-// Returns the length of the whole text without its NUL (`snprintf`-style: a result ≥ `buf_len`
-// means it was truncated), or `TCOMP_ERR_NULL` when `buf` is NULL and `buf_len` > 0.
-// Thread safety: reentrant; touches only `buf`. 160 bytes hold any word.
-//
-// # Safety
-// `buf` must be NULL or point to `buf_len` writable bytes.
-int32_t tcomp_status_describe(uint16_t status,
-                              char *buf,
-                              size_t buf_len);
 
 #ifdef __cplusplus
 }  // extern "C"

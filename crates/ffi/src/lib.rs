@@ -42,9 +42,13 @@ mod error;
 mod guard;
 mod out;
 mod panic;
+mod query;
 mod status;
+mod step;
 
 pub use api::*;
 pub use channel::{TCOMP_CHANNEL_ALIGN, TCOMP_CHANNEL_SIZE, TcompChannel};
 pub use error::*;
+pub use query::*;
 pub use status::*;
+pub use step::*;

@@ -354,3 +354,39 @@ fn status_words_are_named_from_the_cores_table() {
         TCOMP_ERR_NULL
     );
 }
+
+#[test]
+fn metadata_is_the_blobs_borrowed_in_place() {
+    let blob = example_blob(6);
+    let mut s = Storage::new();
+    let mut meta = std::mem::MaybeUninit::<TcompMeta>::zeroed();
+    unsafe { tcomp_channel_init(s.ptr(), PERIOD) };
+    assert_eq!(
+        unsafe { tcomp_channel_meta(s.ptr(), meta.as_mut_ptr()) },
+        TCOMP_ERR_INDEX
+    );
+    unsafe { tcomp_load_blob(s.ptr(), blob.as_ptr(), blob.len(), PERIOD) };
+    assert_eq!(
+        unsafe { tcomp_channel_meta(s.ptr(), meta.as_mut_ptr()) },
+        TCOMP_OK
+    );
+    let meta = unsafe { meta.assume_init() };
+    let str_of = |t: TcompStr| {
+        let bytes = unsafe { std::slice::from_raw_parts(t.ptr.cast::<u8>(), t.len) };
+        // Borrowed from the blob, not copied.
+        let range = blob.as_ptr_range();
+        assert!(t.len == 0 || range.contains(&bytes.as_ptr()));
+        std::str::from_utf8(bytes).unwrap().to_string()
+    };
+    let model = M::decode(&blob).unwrap();
+    assert_eq!(meta.sensor, 0);
+    assert_eq!(str_of(meta.axis), model.meta.axis);
+    assert_eq!(str_of(meta.unit), "deg/h");
+    assert_eq!(str_of(meta.time_column), "time_s");
+    assert_eq!(str_of(meta.target_column), "gyro_dph");
+    assert_eq!(str_of(meta.reference_column), "ref_dph");
+    assert!(meta.reference_value.is_nan());
+    assert_eq!(usize::from(meta.n_centers), model.rbf.centers.len());
+    assert_eq!((meta.n_features, meta.n_inputs), (4, 3));
+    assert_eq!(meta.format_version, model.version);
+}

@@ -7,12 +7,15 @@
 //! * `cargo xtask smoke` — only the QEMU smoke run.
 //! * `cargo xtask power-cut` — the model slots' power-loss test (a power cut after and inside every
 //!   write step of three updates); prints its `POWER-CUT` line.
+//! * `cargo xtask ffi`   — the C API's examples: a host C program against `tcomp eval`, a
+//!   bare-metal C program under QEMU against the host, bit for bit (see `ffi/mod.rs`).
 //! * `cargo xtask qemu`  — the QEMU replay of the 200 Hz loop with bit-exact host parity, fault
 //!   checks and budgets (see `qemu.rs`), and a model update over the emulated UART with
 //!   `tcomp flash` (`update.rs`).
 
 mod board;
 mod elf;
+mod ffi;
 mod qemu;
 mod update;
 
@@ -32,7 +35,8 @@ fn main() -> Result<()> {
         "qemu" => qemu::qemu(),
         "board" => board::board(),
         "power-cut" => power_cut(),
-        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board|power-cut>"),
+        "ffi" => ffi::ffi(),
+        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board|power-cut|ffi>"),
     }
 }
 
@@ -93,7 +97,8 @@ fn ci() -> Result<()> {
     cargo(&["build", "-p", "tcomp-hal", "--target", TARGET, "--release"])?;
     board::board()?;
     smoke()?;
-    qemu::qemu()
+    qemu::qemu()?;
+    ffi::ffi()
 }
 
 /// Runs the smoke binary under QEMU (the runner in `.cargo/config.toml`), echoes its output, and
