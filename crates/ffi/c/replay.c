@@ -15,12 +15,14 @@
  *       compensated f32, correction f32, status u32
  *
  * Prints (through the platform's `write`):
- *   REPLAY samples=N mismatches=M first_mismatch=I hash=H ticks_total=T ticks_max=X
- *   REPLAY-CHECKS corrupt_blob=<error name> status=<names>
+ *   REPLAY samples=N mismatches=M first_mismatch=I hash=H ticks_total=T ticks_max=X stack_peak=S
+ *   REPLAY-CHECKS corrupt_blob=<error name> status=<names> stack_peak_validate=V
  *   REPLAY OK | REPLAY FAIL
  * H is FNV-1a 64 over every output's bytes (compensated, correction, status as 4 LE bytes
  * each): equal hashes on host and target mean bit-identical outputs. T and X are the
- * platform's tick counts around each step call (0 on the host).
+ * platform's tick counts around each step call, S the deepest the stack went while loading and
+ * stepping, V the same after a tcomp_validate_blob (which decodes on the stack), bytes (all 0 on
+ * the host).
  */
 #include "replay.h"
 
@@ -169,6 +171,8 @@ int replay(const uint8_t *v, size_t len, const replay_platform_t *p) {
     put_u64(&l, ticks_total);
     put(&l, " ticks_max=");
     put_u64(&l, ticks_max);
+    put(&l, " stack_peak=");
+    put_u64(&l, p->stack_peak());
     put(&l, "\n");
     p->write(l.buf);
 
@@ -188,6 +192,8 @@ int replay(const uint8_t *v, size_t len, const replay_platform_t *p) {
     put(&l, tcomp_error_name(rc));
     put(&l, " status=");
     put(&l, status);
+    put(&l, " stack_peak_validate=");
+    put_u64(&l, p->stack_peak());
     put(&l, "\n");
     p->write(l.buf);
 

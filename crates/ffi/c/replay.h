@@ -12,6 +12,8 @@ typedef struct {
     uint32_t (*ticks)(void);
     /* ... and the ticks from `t0` to `t1`. */
     uint32_t (*elapsed)(uint32_t t0, uint32_t t1);
+    /* The deepest the stack has been so far, in bytes (0 where it is not measured). */
+    uint32_t (*stack_peak)(void);
 } replay_platform_t;
 
 /* Runs the vector `v` (`len` bytes); nonzero when every output matched. */

@@ -8,6 +8,7 @@
 static void write_stdout(const char *text) { fputs(text, stdout); }
 static uint32_t no_ticks(void) { return 0; }
 static uint32_t no_elapsed(uint32_t t0, uint32_t t1) { return t1 - t0; }
+static uint32_t no_stack(void) { return 0; }
 
 int main(int argc, char **argv) {
     if (argc != 2) {
@@ -28,7 +29,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     fclose(f);
-    replay_platform_t p = {write_stdout, no_ticks, no_elapsed};
+    replay_platform_t p = {write_stdout, no_ticks, no_elapsed, no_stack};
     int ok = replay(v, (size_t)len, &p);
     free(v);
     return ok ? 0 : 1;

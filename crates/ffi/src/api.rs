@@ -110,8 +110,9 @@ pub extern "C" fn tcomp_capacities() -> TcompCapacities {
 ///
 /// Returns `TCOMP_OK`, or the `TCOMP_ERR_BLOB_*` code of the first check that failed
 /// (`TCOMP_ERR_NULL` for a NULL `blob` with `blob_len` > 0).
-/// Decodes on the stack: about 1.5 KB of stack on a Cortex-M4 (use `tcomp_load_blob` into a
-/// channel to decode in place instead). Thread safety: reentrant.
+/// Decodes on the stack: the model (1.9 KB on a Cortex-M4) and the decoder's frames, about
+/// 5.5 KB of stack in all (measured by `cargo xtask ffi`; `tcomp_load_blob` decodes in place and
+/// needs about 1.3 KB less). Thread safety: reentrant.
 ///
 /// # Safety
 /// `blob` must be NULL or point to `blob_len` readable bytes; `why` NULL or `why_len` writable
@@ -180,8 +181,9 @@ pub unsafe extern "C" fn tcomp_channel_init(ch: *mut TcompChannel, period_s: f32
 ///
 /// Returns `TCOMP_OK`, `TCOMP_ERR_NULL`, `TCOMP_ERR_ALIGNMENT`, `TCOMP_ERR_ARGUMENT` (bad period:
 /// `ch` is left as it was) or a `TCOMP_ERR_BLOB_*` code (the reason in full:
-/// `tcomp_channel_describe`). Uses a few hundred bytes of stack (the model is decoded straight
-/// into `ch`). Thread safety: `ch` must not be in use elsewhere.
+/// `tcomp_channel_describe`). The model is decoded straight into `ch`; the decoder's frames
+/// still take about 4 KB of stack on a Cortex-M4 (measured by `cargo xtask ffi`: plan the boot
+/// stack for it; stepping needs far less). Thread safety: `ch` must not be in use elsewhere.
 ///
 /// # Safety
 /// `ch` must be NULL or point to a `tcomp_channel_t` the caller owns; `blob` NULL or `blob_len`

@@ -3,7 +3,7 @@
  * A vector table, a reset handler that copies .data, clears .bss and enables the FPU, then
  * replay() over the vector QEMU's loader put at 0x21000000 (`-device loader`), output and exit
  * code through semihosting, SysTick as the tick counter (25 MHz; under `-icount shift=3` one tick
- * is 5 instructions). A HardFault or a panic inside tcomp (tcomp_panic_hook) ends the run with a
+ * is 5 instructions), and the stack painted at reset so the run's peak can be read. A HardFault or a panic inside tcomp (tcomp_panic_hook) ends the run with a
  * failure exit code, as the Rust firmware's smoke run does.
  */
 #include "../replay.h"
@@ -59,15 +59,26 @@ void tcomp_panic_hook(const uint8_t *file, size_t file_len, uint32_t line) {
     sh_exit(0);
 }
 
+extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _estack;
+
+/* The top 64 KiB of RAM (the stack's) is painted at reset; the lowest word no longer holding the
+ * paint is the deepest the stack went. */
+#define PAINT 0xA5C3A5C3u
+#define PAINTED (64u << 10)
+
+static uint32_t stack_peak(void) {
+    const uint32_t *w = (const uint32_t *)((uintptr_t)&_estack - PAINTED);
+    while (w < &_estack && *w == PAINT) w++;
+    return (uint32_t)((uintptr_t)&_estack - (uintptr_t)w);
+}
+
 int main(void) {
     SYST_RVR = 0x00FFFFFFu;
     SYST_CVR = 0;
     SYST_CSR = 5; /* enable, core clock, no interrupt */
-    replay_platform_t p = {sh_write, systick_now, systick_elapsed};
+    replay_platform_t p = {sh_write, systick_now, systick_elapsed, stack_peak};
     return replay((const uint8_t *)VECTOR_ADDR, VECTOR_MAX, &p);
 }
-
-extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _estack;
 
 void Reset_Handler(void) {
     /* The FPU first: the library is built for the hard-float ABI. */
@@ -75,6 +86,9 @@ void Reset_Handler(void) {
     __asm__ volatile("dsb\n isb" ::: "memory");
     for (uint32_t *s = &_sidata, *d = &_sdata; d < &_edata;) *d++ = *s++;
     for (uint32_t *d = &_sbss; d < &_ebss;) *d++ = 0;
+    uint32_t sp;
+    __asm__ volatile("mov %0, sp" : "=r"(sp));
+    for (uint32_t *w = (uint32_t *)((uintptr_t)&_estack - PAINTED); (uintptr_t)w < sp - 64; w++) *w = PAINT;
     sh_exit(main());
 }
 

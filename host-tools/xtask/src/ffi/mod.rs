@@ -161,8 +161,14 @@ pub fn ffi() -> Result<()> {
         let samples: u64 = t.get("samples").context("samples")?.parse()?;
         let total: u64 = t.get("ticks_total").context("ticks")?.parse()?;
         let max: u64 = t.get("ticks_max").context("ticks")?.parse()?;
+        let stack = t.get("stack_peak").context("no stack_peak")?;
+        let validate = target
+            .split_whitespace()
+            .find_map(|f| f.strip_prefix("stack_peak_validate="))
+            .context("no stack_peak_validate")?;
         per_step.push(format!(
-            "{name} {} samples: {} instructions per step mean, {} worst",
+            "{name} {} samples: {} instructions per step mean, {} worst, stack peak {stack} B \
+             (load and steps; {validate} B with tcomp_validate_blob)",
             samples,
             total * INSTRUCTIONS_PER_TICK / samples.max(1),
             max * INSTRUCTIONS_PER_TICK
