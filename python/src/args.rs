@@ -35,7 +35,9 @@ impl<'py> FromPyObject<'_, 'py> for Columns {
         for (name, b) in names.iter().zip(&raw) {
             let bytes = b.as_bytes();
             if bytes.len() % 8 != 0 {
-                return Err(PyTypeError::new_err(format!("column `{name}`: not float64 data")));
+                return Err(PyTypeError::new_err(format!(
+                    "column `{name}`: not float64 data"
+                )));
             }
             cols.push(
                 bytes
@@ -167,7 +169,9 @@ impl Kwargs {
             None => Ok(default),
             Some(toml::Value::Float(f)) => Ok(f),
             Some(toml::Value::Integer(i)) => Ok(i as f64),
-            Some(other) => Err(PyTypeError::new_err(format!("{name}: a number, not {other}"))),
+            Some(other) => Err(PyTypeError::new_err(format!(
+                "{name}: a number, not {other}"
+            ))),
         }
     }
 
@@ -180,7 +184,9 @@ impl Kwargs {
         match self.take(name) {
             None => Ok(None),
             Some(toml::Value::String(s)) => Ok(Some(s)),
-            Some(other) => Err(PyTypeError::new_err(format!("{name}: a string, not {other}"))),
+            Some(other) => Err(PyTypeError::new_err(format!(
+                "{name}: a string, not {other}"
+            ))),
         }
     }
 

@@ -101,7 +101,9 @@ fn place_of(e: &TrainError) -> Place {
             file: Some(file.clone()),
             ..Place::default()
         },
-        TrainError::UnknownSpecKey { file, line, key, .. } => Place {
+        TrainError::UnknownSpecKey {
+            file, line, key, ..
+        } => Place {
             file: Some(file.clone()),
             line: Some(*line as u64),
             option: Some(python_name(key)),
@@ -147,10 +149,40 @@ fn raise(message: String, place: Place) -> PyErr {
         let err = TcompError::new_err(message);
         let value = err.value(py);
         let set = |name: &str, v: Bound<'_, PyAny>| value.setattr(name, v);
-        let ok = set("file", place.file.into_pyobject(py).map_or_else(|_| py.None().into_bound(py), Bound::into_any))
-            .and_then(|()| set("line", place.line.into_pyobject(py).map_or_else(|_| py.None().into_bound(py), Bound::into_any)))
-            .and_then(|()| set("column", place.column.into_pyobject(py).map_or_else(|_| py.None().into_bound(py), Bound::into_any)))
-            .and_then(|()| set("option", place.option.into_pyobject(py).map_or_else(|_| py.None().into_bound(py), Bound::into_any)));
+        let ok = set(
+            "file",
+            place
+                .file
+                .into_pyobject(py)
+                .map_or_else(|_| py.None().into_bound(py), Bound::into_any),
+        )
+        .and_then(|()| {
+            set(
+                "line",
+                place
+                    .line
+                    .into_pyobject(py)
+                    .map_or_else(|_| py.None().into_bound(py), Bound::into_any),
+            )
+        })
+        .and_then(|()| {
+            set(
+                "column",
+                place
+                    .column
+                    .into_pyobject(py)
+                    .map_or_else(|_| py.None().into_bound(py), Bound::into_any),
+            )
+        })
+        .and_then(|()| {
+            set(
+                "option",
+                place
+                    .option
+                    .into_pyobject(py)
+                    .map_or_else(|_| py.None().into_bound(py), Bound::into_any),
+            )
+        });
         match ok {
             Ok(()) => err,
             Err(e) => e,

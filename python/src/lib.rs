@@ -60,7 +60,12 @@ fn inspect(py: Python<'_>, blob: Vec<u8>) -> PyResult<String> {
 /// Evaluates a blob on columns of data: the residual (float64 bytes, compensated − reference,
 /// one per row) and the figures (the JSON of `tcomp eval --json`'s body).
 #[pyfunction]
-fn evaluate(py: Python<'_>, blob: Vec<u8>, data: Columns, options: Kwargs) -> PyResult<(Py<PyBytes>, String)> {
+fn evaluate(
+    py: Python<'_>,
+    blob: Vec<u8>,
+    data: Columns,
+    options: Kwargs,
+) -> PyResult<(Py<PyBytes>, String)> {
     let eval = options.eval_options("Model.evaluate")?;
     let (residual, report) = py
         .detach(move || -> anyhow::Result<(Vec<u8>, String)> {
@@ -120,7 +125,11 @@ fn calibrate(
     gate: bool,
 ) -> PyResult<String> {
     py.detach(move || -> anyhow::Result<String> {
-        let summary = out.join(if units.is_some() { "fleet.json" } else { "summary.json" });
+        let summary = out.join(if units.is_some() {
+            "fleet.json"
+        } else {
+            "summary.json"
+        });
         let args = tcomp::cmd::calibrate::Args {
             spec,
             out,
