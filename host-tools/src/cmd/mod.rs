@@ -34,7 +34,7 @@ pub mod output;
 pub mod printable;
 pub mod progress;
 pub mod report;
-mod run;
+pub mod run;
 pub mod simulate;
 mod simulate_units;
 pub mod stdout;

@@ -7,6 +7,10 @@
 //! * `cargo xtask smoke` — only the QEMU smoke run.
 //! * `cargo xtask power-cut` — the model slots' power-loss test (a power cut after and inside every
 //!   write step of three updates); prints its `POWER-CUT` line.
+//! * `cargo xtask ffi`   — the C API's examples: a host C program against `tcomp eval`, a
+//!   bare-metal C program under QEMU against the host, bit for bit (see `ffi/mod.rs`).
+//! * `cargo xtask python` — the Python wheel built, installed into a fresh virtual environment,
+//!   and its pytest suite run (see `python.rs`).
 //! * `cargo xtask qemu`  — the QEMU replay of the 200 Hz loop with bit-exact host parity, fault
 //!   checks and budgets (see `qemu.rs`), and a model update over the emulated UART with
 //!   `tcomp flash` (`update.rs`).
@@ -14,7 +18,9 @@
 mod board;
 mod defmt;
 mod elf;
+mod ffi;
 mod proc;
+mod python;
 mod qemu;
 mod update;
 
@@ -35,7 +41,9 @@ fn main() -> Result<()> {
         "qemu" => qemu::qemu(),
         "board" => board::board(),
         "power-cut" => power_cut(),
-        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board|power-cut>"),
+        "ffi" => ffi::ffi(),
+        "python" => python::python(),
+        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board|power-cut|ffi|python>"),
     }
 }
 
@@ -147,7 +155,9 @@ fn ci() -> Result<()> {
     })?;
     steps.run("board", board::board)?;
     steps.run("smoke", smoke)?;
-    steps.run("qemu", qemu::qemu)
+    steps.run("qemu", qemu::qemu)?;
+    steps.run("ffi", ffi::ffi)?;
+    steps.run("python", python::python)
 }
 
 /// Runs the smoke binary under QEMU (with the runner's arguments of `.cargo/config.toml`, bounded
