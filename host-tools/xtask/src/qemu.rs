@@ -42,6 +42,11 @@ const TCOMP_LIMIT: Duration = proc::minutes(3);
 /// One QEMU replay: 10,000 samples (50 s of guest time) take about 6 s on the 2-core machine.
 pub const QEMU_LIMIT: Duration = proc::minutes(5);
 
+/// The QEMU board's crate and the binary that binds the application to it.
+pub const QEMU_BOARD: &str = "tcomp-board-qemu";
+/// See [`QEMU_BOARD`].
+pub const QEMU_BIN: &str = "tcomp-qemu";
+
 /// The workspace's target directory (`CARGO_TARGET_DIR` or `target/`).
 pub fn target_dir() -> PathBuf {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -193,14 +198,14 @@ pub fn qemu() -> Result<()> {
     cargo(&[
         "build",
         "-p",
-        "tcomp-firmware",
+        QEMU_BOARD,
         "--target",
         TARGET,
         "--release",
         "--bin",
-        "replay",
+        QEMU_BIN,
     ])?;
-    let elf = target_dir.join(TARGET).join("release/replay");
+    let elf = target_dir.join(TARGET).join("release").join(QEMU_BIN);
     // The host CLI makes the models and vectors; build it so `cargo xtask qemu` stands alone. With
     // the test step's own command, so in CI it is already built: `cargo build -p tcomp` resolves
     // the dependencies' features for `tcomp` alone and rebuilt some forty crates a second time
