@@ -55,6 +55,21 @@ pub static RESET_STATE: AtomicU8 = AtomicU8::new(0);
 pub const RESET_REQUESTED: u8 = 1;
 /// See [`RESET_STATE`].
 pub const RESET_DRAINED: u8 = 2;
+/// The trial boot's confirm: 0 not due, [`CONFIRM_DUE`] (the sample task: the loop has run
+/// correctly for [`CONFIRM_PERIODS`]), then [`CONFIRMED`] or [`CONFIRM_FAILED`] (the update task,
+/// which owns the flash, programmed the confirm word).
+pub static CONFIRM_STATE: AtomicU8 = AtomicU8::new(0);
+/// See [`CONFIRM_STATE`].
+pub const CONFIRM_DUE: u8 = 1;
+/// See [`CONFIRM_STATE`].
+pub const CONFIRMED: u8 = 2;
+/// See [`CONFIRM_STATE`].
+pub const CONFIRM_FAILED: u8 = 3;
+/// Periods a trial boot must run with every task alive (the watchdog fed each period) before its
+/// image is confirmed: 10 s at 200 Hz, one boot-report period. Long enough to catch an image that
+/// does not load, a crash or hang the new models cause in the first samples, a boot loop; the old
+/// image is kept until then.
+pub const CONFIRM_PERIODS: u32 = crate::boot::REPORT_PERIODS;
 
 /// What the tasks count, for the boards' reports (the QEMU run's summary, the boot report).
 #[derive(Debug)]

@@ -14,6 +14,7 @@ use embedded_storage::nor_flash::{
 };
 use tcomp_core::image::Image;
 use tcomp_core::slots::{Active, Header, Layout, SlotId, select};
+pub use tcomp_core::slots::{BootSlots, confirm};
 
 /// mps2-an386: `MODELS` is 64 KiB at `0x003F_0000`: slot A at its start, slot B at `0x003F_8000`.
 pub const QEMU_LAYOUT: Layout = Layout {
@@ -43,6 +44,7 @@ pub enum Source {
 
 /// The boot's choice.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
 pub struct Choice {
     /// The image to load the models from: its offset and length in the `MODELS` region (`None`
     /// without one). The board maps exactly these bytes for the loop's models; an update never
@@ -52,6 +54,11 @@ pub struct Choice {
     pub active: Option<Active>,
     /// Where the image came from.
     pub source: Source,
+    /// The image runs on trial (a newly committed slot's first boot): the application confirms it
+    /// once it has run correctly; a boot that ends before rolls it back.
+    pub trial: bool,
+    /// A slot whose trial failed was found: this boot runs the one before it.
+    pub rolled_back: bool,
 }
 
 /// A board's `MODELS` region read as a [`ReadNorFlash`] (offsets from its start), and its bytes as
@@ -87,6 +94,8 @@ pub fn choose<F: MappedFlash>(flash: &mut F, layout: &Layout) -> Choice {
             image: Some((active.payload(layout), active.header.length)),
             active: Some(active),
             source: Source::Slot(active.slot, active.header.generation),
+            trial: false,
+            rolled_back: false,
         };
     }
     if holds_image(flash, layout.a, layout.size) {
@@ -102,13 +111,33 @@ pub fn choose<F: MappedFlash>(flash: &mut F, layout: &Layout) -> Choice {
                 header,
             }),
             source: Source::Probe,
+            trial: false,
+            rolled_back: false,
         };
     }
     Choice {
         image: None,
         active: None,
         source: Source::None,
+        trial: false,
+        rolled_back: false,
     }
+}
+
+/// The boot's work on the slots, before the watchdog starts ([`tcomp_core::slots::boot`]): the
+/// image to run, a newly committed slot's trial begun, the slot an update will write erased unless
+/// the running image is on trial (the old one is then the rollback). A bare image a probe wrote
+/// at slot A counts as confirmed and is kept while it runs.
+pub fn boot<F: NorFlash + MappedFlash>(flash: &mut F, layout: &Layout) -> Result<Choice, F::Error> {
+    let probe = holds_image(flash, layout.a, layout.size);
+    let slots =
+        tcomp_core::slots::boot(flash, layout, probe.then_some(SlotId::A), |f, off, len| {
+            holds_image(f, off, len)
+        })?;
+    let mut choice = choose(flash, layout);
+    choice.trial = slots.trial;
+    choice.rolled_back = slots.rolled_back;
+    Ok(choice)
 }
 
 /// Memory-mapped flash read as a [`MappedFlash`] (a read-only view: host tests, tools).
@@ -147,26 +176,6 @@ fn blank<F: MappedFlash>(flash: &F, from: u32, to: u32) -> bool {
     flash
         .mapped(from, to.saturating_sub(from))
         .is_some_and(|r| r.iter().all(|&b| b == 0xFF))
-}
-
-/// Erases the slot an update would write (the one that is not `active`, A when none is) unless it
-/// is blank, so that an update never has to erase while the loop runs. Call it at boot, before the
-/// loop and the watchdog start. Returns whether an erase was needed.
-pub fn erase_inactive<F: NorFlash + MappedFlash>(
-    flash: &mut F,
-    layout: &Layout,
-    active: Option<Active>,
-) -> Result<bool, F::Error> {
-    // The receiver's target ([`tcomp_core::update::Receiver::target`]): the other slot, or A when
-    // nothing is active (then nothing valid is lost).
-    let slot = active.map_or(SlotId::A, |a| a.slot.other());
-    let from = layout.base(slot);
-    let to = from.saturating_add(layout.size);
-    if blank(flash, from, to) {
-        return Ok(false);
-    }
-    flash.erase(from, to)?;
-    Ok(true)
 }
 
 /// Why a run-time flash operation failed.
@@ -358,9 +367,14 @@ mod tests {
         (tx.status(), requested)
     }
 
-    fn boot_erase(flash: &mut Flash) -> bool {
-        let active = choose(flash, &QEMU_LAYOUT).active;
-        erase_inactive(flash, &QEMU_LAYOUT, active).unwrap()
+    /// A boot: the slots' trial and erase work; returns the choice.
+    fn boot_now(flash: &mut Flash) -> Choice {
+        boot(flash, &QEMU_LAYOUT).unwrap()
+    }
+
+    fn confirm_running(flash: &mut Flash) {
+        let slot = choose(flash, &QEMU_LAYOUT).active.unwrap().slot;
+        confirm(flash, &QEMU_LAYOUT, slot).unwrap();
     }
 
     #[test]
@@ -380,7 +394,11 @@ mod tests {
         let (source, bytes) = booted(&mut flash);
         assert_eq!(source, Source::Probe);
         assert_eq!(&bytes[..old.len()], &old[..]);
-        assert!(!boot_erase(&mut flash), "slot B is blank: nothing to erase");
+        assert_eq!(
+            boot_now(&mut flash).source,
+            Source::Probe,
+            "slot B is blank"
+        );
         let (status, requested) = update(&mut flash, &new);
         assert_eq!(
             status,
@@ -394,9 +412,17 @@ mod tests {
             booted(&mut flash),
             (Source::Slot(SlotId::B, 1), new.clone())
         );
-        // The probe's image is untouched until the boot erases it for the next update.
+        // The new image's first boot is its trial: the probe's image is kept for a rollback, so
+        // no update can be written yet.
+        let c = boot_now(&mut flash);
+        assert_eq!((c.source, c.trial), (Source::Slot(SlotId::B, 1), true));
         assert_eq!(&flash.0.bytes()[..old.len()], &old[..]);
-        assert!(boot_erase(&mut flash));
+        let (status, requested) = update(&mut flash, &image(3));
+        assert!(!matches!(status, Status::Done { .. }) && requested);
+        // Confirmed, the next boot erases the probe's image and the update goes through.
+        confirm_running(&mut flash);
+        let c = boot_now(&mut flash);
+        assert_eq!((c.source, c.trial), (Source::Slot(SlotId::B, 1), false));
         let third = image(3);
         assert!(matches!(
             update(&mut flash, &third).0,
@@ -428,6 +454,8 @@ mod tests {
             update(&mut flash, &image(1)).0,
             Status::Done { .. }
         ));
+        boot_now(&mut flash);
+        confirm_running(&mut flash);
         // Slot B holds garbage (a session that stopped half way).
         flash.write(32 * 1024, &[0u8; 64]).unwrap();
         let before = flash.0.bytes().to_vec();
@@ -441,10 +469,49 @@ mod tests {
         );
         assert_eq!(booted(&mut flash).1, image(1));
 
-        assert!(boot_erase(&mut flash));
+        boot_now(&mut flash);
         let (status, requested) = update(&mut flash, &image(2));
         assert!(matches!(status, Status::Done { .. }), "{status:?}");
         assert!(!requested);
         assert_eq!(booted(&mut flash).1, image(2));
+    }
+
+    /// A trial that ends before its confirm (a reset, a crash, a power cut, the application's
+    /// rollback) is rolled back at the next boot: the old image runs, whole, and the failed one is
+    /// erased for the next update.
+    #[test]
+    fn a_trial_that_never_confirms_is_rolled_back() {
+        let mut flash = Flash(Sim::new());
+        assert!(matches!(
+            update(&mut flash, &image(1)).0,
+            Status::Done { .. }
+        ));
+        let c = boot_now(&mut flash);
+        assert!(c.trial);
+        confirm_running(&mut flash);
+        assert!(!boot_now(&mut flash).trial);
+        assert!(matches!(
+            update(&mut flash, &image(2)).0,
+            Status::Done { .. }
+        ));
+        let c = boot_now(&mut flash);
+        assert_eq!((c.source, c.trial), (Source::Slot(SlotId::B, 2), true));
+        assert_eq!(booted(&mut flash).1, image(2));
+        // No confirm: the next boot runs image 1 again and erases slot B.
+        let c = boot_now(&mut flash);
+        assert_eq!(
+            (c.source, c.trial, c.rolled_back),
+            (Source::Slot(SlotId::A, 1), false, true)
+        );
+        assert_eq!(booted(&mut flash).1, image(1));
+        assert!(flash.0.bytes()[32 * 1024..].iter().all(|&b| b == 0xFF));
+        // And an update after it writes B again, as generation 2.
+        assert!(matches!(
+            update(&mut flash, &image(3)).0,
+            Status::Done {
+                slot: SlotId::B,
+                generation: 2
+            }
+        ));
     }
 }

@@ -5,7 +5,10 @@
 
 use super::liveness::{Liveness, Task};
 use super::timing::{Edges, Entry};
-use super::{DRAIN_BEAT, RESET_DRAINED, RESET_STATE, STATS, UPDATE_BEAT};
+use super::{
+    CONFIRM_DUE, CONFIRM_PERIODS, CONFIRM_STATE, DRAIN_BEAT, RESET_DRAINED, RESET_STATE, STATS,
+    UPDATE_BEAT,
+};
 use crate::app::{App, MAX_CHANNELS, Record, status};
 use crate::boot::REPORT_PERIODS;
 use crate::timing::TimeCheck;
@@ -98,6 +101,8 @@ pub struct SampleTask<S: SampleIo> {
     /// Bits for the next frame only (the boot's: `FIRST_SAMPLE`, `WATCHDOG_RESET`).
     boot_flags: u16,
     report: BootReport,
+    /// On trial: periods in a row with every task alive, until the confirm is due.
+    trial: Option<u32>,
 }
 
 impl<S: SampleIo> SampleTask<S> {
@@ -111,6 +116,7 @@ impl<S: SampleIo> SampleTask<S> {
         boot_flags: u16,
         report: BootReport,
         ticks_per_latch: u64,
+        trial: bool,
     ) -> Self {
         io.booted(&report);
         let first_edge = io.start();
@@ -124,6 +130,7 @@ impl<S: SampleIo> SampleTask<S> {
             next: first,
             boot_flags,
             report,
+            trial: trial.then_some(0),
         }
     }
 
@@ -197,8 +204,22 @@ impl<S: SampleIo> SampleTask<S> {
             self.send_report(next as u32, enqueue);
         }
         match self.liveness.check(DRAIN_BEAT.count(), UPDATE_BEAT.count()) {
-            Ok(()) => self.io.feed_watchdog(),
-            Err(task) => self.io.stuck(task),
+            Ok(()) => {
+                self.io.feed_watchdog();
+                if let Some(n) = self.trial.as_mut() {
+                    *n += 1;
+                    if *n >= CONFIRM_PERIODS {
+                        CONFIRM_STATE.store(CONFIRM_DUE, Ordering::Release);
+                        self.trial = None;
+                    }
+                }
+            }
+            Err(task) => {
+                self.io.stuck(task);
+                if let Some(n) = self.trial.as_mut() {
+                    *n = 0;
+                }
+            }
         }
         STATS.record_task_cost(S::cost_since(task_start));
         self.io.after(&period);

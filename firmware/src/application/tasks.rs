@@ -4,17 +4,17 @@
 use super::sample::{SampleIo, SampleTask};
 use super::serial::{self, RxSource, SerialTx, TxConsumer};
 use super::{
-    DRAIN_ACTIVE, DRAIN_BEAT, RESET_DRAINED, RESET_REQUESTED, RESET_STATE, STATS, UPDATE_ACTIVE,
-    UPDATE_BEAT, UPDATE_STATE,
+    CONFIRM_DUE, CONFIRM_FAILED, CONFIRM_STATE, CONFIRMED, DRAIN_ACTIVE, DRAIN_BEAT, RESET_DRAINED,
+    RESET_REQUESTED, RESET_STATE, STATS, UPDATE_ACTIVE, UPDATE_BEAT, UPDATE_STATE,
 };
 use crate::app::{App, ChannelConfig, LoadError, MAX_CHANNELS, status};
 use crate::image::check_unit;
-use crate::slots::{MappedFlash, RunTime, validates};
+use crate::slots::{MappedFlash, RunTime, confirm, validates};
 use crate::update::{MAX_REPLY, UpdateTask, serial_text};
 use core::sync::atomic::Ordering;
 use embedded_storage::nor_flash::NorFlash;
 use tcomp_core::frame::BootReport;
-use tcomp_core::slots::{Active, Layout};
+use tcomp_core::slots::{Active, Layout, SlotId};
 
 /// A board's model flash: the `MODELS` region (offsets from its start), programmable, and mapped.
 pub trait ModelFlash: NorFlash + MappedFlash {}
@@ -41,6 +41,9 @@ pub struct Boot {
     pub active: Option<Active>,
     /// The model slots.
     pub layout: Layout,
+    /// The running image is on trial (a newly committed slot's first boot): confirmed once the
+    /// loop has run correctly for [`CONFIRM_PERIODS`], rolled back by the next boot otherwise.
+    pub trial: bool,
     /// The boot followed a watchdog reset.
     pub watchdog_reset: bool,
     /// The first period's number (the frames' sequence numbers count on from it).
@@ -106,6 +109,9 @@ pub struct Update<Rx: RxSource, F: ModelFlash> {
     task: UpdateTask,
     serial: [u8; 18],
     unit: u64,
+    layout: Layout,
+    /// The slot on trial, until it is confirmed.
+    trial: Option<SlotId>,
 }
 
 impl<Rx: RxSource, F: ModelFlash> Update<Rx, F> {
@@ -114,6 +120,17 @@ impl<Rx: RxSource, F: ModelFlash> Update<Rx, F> {
     pub fn run(&mut self, enqueue: &mut dyn FnMut(&[u8]) -> bool) {
         UPDATE_ACTIVE.store(true, Ordering::Relaxed);
         UPDATE_BEAT.beat();
+        if let Some(slot) = self.trial
+            && CONFIRM_STATE.load(Ordering::Acquire) == CONFIRM_DUE
+        {
+            // The trial boot has run correctly: one word program, never an erase.
+            let done = confirm(self.flash.inner(), &self.layout, slot).is_ok();
+            CONFIRM_STATE.store(
+                if done { CONFIRMED } else { CONFIRM_FAILED },
+                Ordering::Release,
+            );
+            self.trial = None;
+        }
         let unit = self.unit;
         let mut reply = [0u8; MAX_REPLY];
         while let Some(byte) = self.rx.pop() {
@@ -195,6 +212,11 @@ pub fn init<S: SampleIo, Tx: SerialTx, R, Rx: RxSource, F: ModelFlash>(
     app.reset(boot.config);
     let loaded = load(app, &boot);
     let report = report(&boot, &loaded);
+    if boot.trial && !proves(&loaded[..boot.config.len().min(MAX_CHANNELS)]) {
+        // A new image on trial that does not load: roll it back now (the boot after the reset
+        // runs the old one) rather than run without the models it replaced.
+        RESET_STATE.store(RESET_REQUESTED, Ordering::Release);
+    }
     // The first frame of a boot is flagged: its filters start from nothing, its counts cover the
     // interval since the counters were last read (by the previous run, or never).
     let mut boot_flags = status::FIRST_SAMPLE;
@@ -208,6 +230,7 @@ pub fn init<S: SampleIo, Tx: SerialTx, R, Rx: RxSource, F: ModelFlash>(
         boot_flags,
         report,
         boot.ticks_per_latch,
+        boot.trial,
     );
     sample.send_report(boot.first_period as u32, enqueue);
     Parts {
@@ -220,8 +243,22 @@ pub fn init<S: SampleIo, Tx: SerialTx, R, Rx: RxSource, F: ModelFlash>(
             task: UpdateTask::new(boot.layout, boot.active),
             serial: serial_text(boot.unit),
             unit: boot.unit,
+            layout: boot.layout,
+            trial: boot.trial.then_some(boot.active.map(|a| a.slot)).flatten(),
         },
     }
+}
+
+/// Whether a trial image's load proves it: every channel loaded, or has no model in the image
+/// (a channel the image leaves out runs raw, as it did before). A channel refused for any other
+/// reason (a corrupt blob, another board's table, a blob for another channel) fails the trial.
+fn proves(loaded: &[Result<(), LoadError>]) -> bool {
+    loaded.iter().all(|l| {
+        matches!(
+            l,
+            Ok(()) | Err(LoadError::Image(crate::image::ImageError::Missing))
+        )
+    })
 }
 
 /// Decodes the models (the boot's stack peak: the decoder's frame lies on top of this one's).

@@ -82,7 +82,7 @@ pub fn run(
     if n == 0 || lost != 0 || last + 1 - first != n {
         bail!("output frames during the update: {n} from {first} to {last}, {lost} lost");
     }
-    if !text.contains("UPDATE-COMMITTED slot=B generation=1") {
+    if !text.contains("UPDATE-COMMITTED Slot(B, 1)") {
         bail!("the firmware did not report the commit of slot B");
     }
     let boot = text
@@ -92,8 +92,17 @@ pub fn run(
     if !boot.contains("source=Slot(B, 1)") || field(boot, "models_loaded=") != Some(6) {
         bail!("after the reset the firmware does not run the new image: {boot}");
     }
+    // The new image's first boot is its trial: the application confirms it after 10 s of the
+    // loop with every task alive, and the old one is kept until then.
+    let trial = text
+        .lines()
+        .find(|l| l.contains("UPDATE-TRIAL"))
+        .context("the boot after the update did not end its trial")?;
+    if !trial.contains("source=Slot(B, 1) confirmed=true slot_state=Some(Confirmed)") {
+        bail!("the new image's trial boot did not confirm it: {trial}");
+    }
     println!(
-        "update over the UART: committed to slot B, {n} output frames during it (sequences {first}..={last}, none lost); after the reset: slot B, generation 1, 6 of 6 models"
+        "update over the UART: committed to slot B, {n} output frames during it (sequences {first}..={last}, none lost); after the reset: slot B, generation 1, 6 of 6 models, on trial, confirmed"
     );
     Ok(())
 }

@@ -21,15 +21,15 @@ use tcomp_board_qemu::drivers::{self, RamFlash, TimeBase, Timer, Uart, Watchdog}
 use tcomp_core::frame::BootReport;
 use tcomp_firmware::app::{ChannelConfig, IFOG1, IMU6, Record};
 use tcomp_firmware::application::{
-    self, Boot, Devices, Period, ReceiveIrq, STATS, Stats, Task, Timestamp, UPDATE_COMMITTED,
-    UPDATE_STATE,
+    self, Boot, CONFIRM_STATE, CONFIRMED, Devices, Period, ReceiveIrq, STATS, Stats, Task,
+    Timestamp, UPDATE_COMMITTED, UPDATE_STATE,
 };
 use tcomp_firmware::fault::{FaultKind, FaultRecord};
 use tcomp_firmware::replay::{
     self, CONFIG_IFOG1, CONFIG_IMU6, HANG, HOLD_FOR_UPDATE, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD,
     UNIT_SERIAL, Vector,
 };
-use tcomp_firmware::slots::{QEMU_LAYOUT, Source, choose, erase_inactive};
+use tcomp_firmware::slots::{QEMU_LAYOUT, Source, boot, choose};
 use tcomp_firmware::{HASH_START, fold_hash};
 
 /// Instructions per SysTick tick under `-icount shift=3` (40 ns per tick, 8 ns per instruction).
@@ -76,6 +76,8 @@ static mut FAULT: MaybeUninit<FaultRecord> = MaybeUninit::uninit();
 static mut RUN: MaybeUninit<Run> = MaybeUninit::uninit();
 /// Set by the sample task after the vector's last sample: `idle` ends the run.
 static DONE: AtomicBool = AtomicBool::new(false);
+/// This boot follows the reset that activates an update.
+static AFTER_UPDATE: AtomicBool = AtomicBool::new(false);
 /// The task the sample task found stuck (its code), for the watchdog's fault record.
 static STUCK: AtomicU8 = AtomicU8::new(0);
 /// The painted stack window.
@@ -232,6 +234,7 @@ pub fn setup(
         ((*p).magic, (*p).update_reset, (*p).next)
     };
     let after_update = magic == RUN_MAGIC && update_reset == UPDATE_RESET;
+    AFTER_UPDATE.store(after_update, Ordering::Release);
     let mut watchdog_reset = false;
     match fault.and_then(|f| f.valid()) {
         _ if after_update => {
@@ -264,11 +267,12 @@ pub fn setup(
             (&raw const __models_end as usize).saturating_sub(&raw const __models_start as usize),
         )
     };
-    let choice = choose(&mut flash, &QEMU_LAYOUT);
-    // The slot an update writes, erased now (before the watchdog and the loop start).
-    if let Ok(true) = erase_inactive(&mut flash, &QEMU_LAYOUT, choice.active) {
-        defmt::info!("model update slot erased at boot");
-    }
+    // The slots' boot work, before the watchdog and the loop start: a new image's trial begun,
+    // a failed trial rolled back, the slot an update writes erased unless the old image is needed.
+    let choice = match boot(&mut flash, &QEMU_LAYOUT) {
+        Ok(c) => c,
+        Err(_) => choose(&mut flash, &QEMU_LAYOUT),
+    };
     let image = match choice.image {
         // SAFETY: the active slot's payload: an update writes only the other slot, and the
         // board's erase at boot touched only that one, so nothing writes these bytes while the
@@ -334,6 +338,7 @@ pub fn setup(
             image,
             active: choice.active,
             layout: QEMU_LAYOUT,
+            trial: choice.trial,
             watchdog_reset,
             first_period: first,
             ticks_per_latch: TICKS_PER_PERIOD,
@@ -378,6 +383,7 @@ impl ReplayIo {
     /// The vector's last record, served again past its end while an update is under way.
     fn hold(&mut self, number: u64) -> bool {
         let waiting = self.vector.flags & HOLD_FOR_UPDATE != 0
+            && self.after_update.is_none()
             && UPDATE_STATE.load(Ordering::Acquire) != UPDATE_COMMITTED;
         let last = self.vector.samples as u64 - 1;
         if !waiting || number - last > HOLD_LIMIT {
@@ -461,7 +467,9 @@ impl application::SampleIo for ReplayIo {
     /// as the host's loop computed them), folded into the run's hash, and the run's counters.
     fn observe(&mut self, period: &Period, records: &[Record]) {
         let n = period.index();
-        if n >= self.vector.samples {
+        if n >= self.vector.samples || self.after_update.is_some() {
+            // Past the vector, or the boot after an update: the new models' outputs are not the
+            // host's (computed for the image before the update).
             return;
         }
         let r = run();
@@ -520,7 +528,7 @@ impl application::SampleIo for ReplayIo {
     }
 
     /// The boot after an update's reset: what the application loaded from the image the boot
-    /// chose, then the run ends (the replay vector was played by the boot before).
+    /// chose. The run goes on (the vector again, not compared) so the trial can be confirmed.
     fn booted(&mut self, report: &BootReport) {
         let Some(source) = self.after_update else {
             return;
@@ -533,7 +541,6 @@ impl application::SampleIo for ReplayIo {
             loaded,
             channels.len()
         );
-        drivers::exit(matches!(source, Source::Slot(..)))
     }
 
     fn reset(&mut self) -> ! {
@@ -585,24 +592,51 @@ fn finish() -> ! {
         r.dropped,
         drivers::rx_lost(),
     );
+    if AFTER_UPDATE.load(Ordering::Acquire) {
+        // The boot after an update: ends on whether the trial was confirmed.
+        let confirmed = CONFIRM_STATE.load(Ordering::Acquire) == CONFIRMED;
+        // SAFETY: as below: nothing writes the region any more.
+        let mut flash = unsafe { models_flash() };
+        let now = choose(&mut flash, &QEMU_LAYOUT).source;
+        let state = match choose(&mut flash, &QEMU_LAYOUT).active {
+            Some(a) => tcomp_core::slots::trial(&mut flash, &QEMU_LAYOUT, a.slot).ok(),
+            None => None,
+        };
+        defmt::println!(
+            "UPDATE-TRIAL source={} confirmed={=bool} slot_state={}",
+            now,
+            confirmed,
+            state
+        );
+        drivers::exit(confirmed && state == Some(tcomp_core::slots::Trial::Confirmed))
+    }
     let ok = r.mismatches == 0 && r.samples > 0;
     if ok && UPDATE_STATE.load(Ordering::Acquire) == UPDATE_COMMITTED {
         // What the next boot will run, read from the slots as the boot reads them.
-        // SAFETY: the MODELS region; every task that writes it is stopped (the update task's
-        // last request was the commit, and nothing runs but this).
-        let mut flash = unsafe {
-            RamFlash::new(
-                &raw const __models_start,
-                (&raw const __models_end as usize)
-                    .saturating_sub(&raw const __models_start as usize),
-            )
-        };
+        // SAFETY: every task that writes the region is stopped (the update task's last request
+        // was the commit, and nothing runs but this).
+        let mut flash = unsafe { models_flash() };
         let next = choose(&mut flash, &QEMU_LAYOUT).source;
         defmt::println!("UPDATE-COMMITTED {}: resetting to run it", next);
         r.update_reset = UPDATE_RESET;
         cortex_m::peripheral::SCB::sys_reset();
     }
     drivers::exit(ok)
+}
+
+/// The `MODELS` region as a flash.
+///
+/// # Safety
+/// As [`RamFlash::new`]: no reference may be alive over a part the returned flash writes.
+unsafe fn models_flash() -> RamFlash {
+    // SAFETY: the linker symbols bound the MODELS region of `memory.x` (mapped RAM under QEMU);
+    // the caller's contract.
+    unsafe {
+        RamFlash::new(
+            &raw const __models_start,
+            (&raw const __models_end as usize).saturating_sub(&raw const __models_start as usize),
+        )
+    }
 }
 
 /// The watchdog's early warning: the loop has not fed it for three and a half periods (it hangs,

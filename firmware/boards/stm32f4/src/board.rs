@@ -17,7 +17,7 @@ use stm32f4xx_hal::{ClearFlags, ReadFlags};
 use tcomp_firmware::application::{
     self, Boot, Devices, ReceiveIrq, RingReader, RingWriter, Task, Timestamp,
 };
-use tcomp_firmware::slots::{STM32F4_LAYOUT, choose, erase_inactive};
+use tcomp_firmware::slots::{STM32F4_LAYOUT, boot, choose};
 
 use crate::flash::ModelFlash;
 use crate::setup::{self, CYCLES_PER_PERIOD, RX_RING, TICK_HZ, TICKS_PER_PERIOD};
@@ -70,13 +70,17 @@ pub fn setup(
             kib
         );
     }
-    let choice = choose(&mut flash, &STM32F4_LAYOUT);
-    defmt::info!("models: {}", choice.source);
-    match erase_inactive(&mut flash, &STM32F4_LAYOUT, choice.active) {
-        Ok(true) => defmt::info!("model update slot erased at boot"),
-        Ok(false) => {}
-        Err(e) => defmt::warn!("model update slot: erase failed ({})", e),
-    }
+    // The slots' boot work, before the watchdog starts (an erase stalls every flash fetch for
+    // 1–2 s): a new image's trial begun, a failed trial rolled back, the slot an update writes
+    // erased unless the old image is still the rollback.
+    let choice = match boot(&mut flash, &STM32F4_LAYOUT) {
+        Ok(c) => c,
+        Err(e) => {
+            defmt::warn!("model slots: boot work failed ({}); running what they hold", e);
+            choose(&mut flash, &STM32F4_LAYOUT)
+        }
+    };
+    defmt::info!("models: {}", choice);
     let image = match choice.image {
         // SAFETY: the active slot's payload: an update writes only the other slot, and the boot's
         // erase touched only that one.
@@ -109,6 +113,7 @@ pub fn setup(
             image,
             active: choice.active,
             layout: STM32F4_LAYOUT,
+            trial: choice.trial,
             watchdog_reset,
             first_period: 0,
             ticks_per_latch: u64::from(TICKS_PER_PERIOD),
