@@ -95,6 +95,8 @@ pub struct Stats {
     pub dropped_replies: AtomicU32,
     /// Received bytes lost before the update task read them.
     pub rx_lost: AtomicU32,
+    /// The stack's peak use, bytes, as the board measures it (its paint).
+    pub stack_peak: AtomicU32,
     /// Sample periods that began while the drain, or the update task, was running.
     pub drain_preempted: AtomicU32,
     /// See `drain_preempted`.
@@ -114,6 +116,7 @@ impl Stats {
             dropped_frames: AtomicU32::new(0),
             dropped_replies: AtomicU32::new(0),
             rx_lost: AtomicU32::new(0),
+            stack_peak: AtomicU32::new(0),
             drain_preempted: AtomicU32::new(0),
             update_preempted: AtomicU32::new(0),
         }

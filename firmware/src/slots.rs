@@ -84,12 +84,22 @@ fn holds_image<F: MappedFlash>(flash: &F, offset: u32, len: u32) -> bool {
         .is_some_and(|b| Image::parse(b).is_ok())
 }
 
-/// Chooses the image to run from the `MODELS` region `flash`. A flash read error counts as "no
-/// slot".
+/// Chooses the image to run from the `MODELS` region `flash` (read only: what [`boot`] would run,
+/// without its trial and erase work). A flash read error counts as "no slot". A slot on trial reads
+/// as a failed trial here (only the boot that programs the trial word runs it).
 pub fn choose<F: MappedFlash>(flash: &mut F, layout: &Layout) -> Choice {
-    if let Ok(Some(active)) = select(flash, layout, |f: &mut F, off, len| {
+    let active = select(flash, layout, |f: &mut F, off, len| {
         holds_image(f, off, len)
-    }) {
+    })
+    .ok()
+    .flatten();
+    choice(flash, layout, active)
+}
+
+/// The choice for the committed slot `active`, or failing one a probe's bare image at slot A, or
+/// nothing.
+fn choice<F: MappedFlash>(flash: &F, layout: &Layout, active: Option<Active>) -> Choice {
+    if let Some(active) = active {
         return Choice {
             image: Some((active.payload(layout), active.header.length)),
             active: Some(active),
@@ -134,7 +144,7 @@ pub fn boot<F: NorFlash + MappedFlash>(flash: &mut F, layout: &Layout) -> Result
         tcomp_core::slots::boot(flash, layout, probe.then_some(SlotId::A), |f, off, len| {
             holds_image(f, off, len)
         })?;
-    let mut choice = choose(flash, layout);
+    let mut choice = choice(flash, layout, slots.active);
     choice.trial = slots.trial;
     choice.rolled_back = slots.rolled_back;
     Ok(choice)
@@ -372,9 +382,10 @@ mod tests {
         boot(flash, &QEMU_LAYOUT).unwrap()
     }
 
-    fn confirm_running(flash: &mut Flash) {
-        let slot = choose(flash, &QEMU_LAYOUT).active.unwrap().slot;
-        confirm(flash, &QEMU_LAYOUT, slot).unwrap();
+    /// The application's confirm of the slot a boot runs on trial.
+    fn confirm_trial(flash: &mut Flash, c: &Choice) {
+        assert!(c.trial);
+        confirm(flash, &QEMU_LAYOUT, c.active.unwrap().slot).unwrap();
     }
 
     #[test]
@@ -420,7 +431,7 @@ mod tests {
         let (status, requested) = update(&mut flash, &image(3));
         assert!(!matches!(status, Status::Done { .. }) && requested);
         // Confirmed, the next boot erases the probe's image and the update goes through.
-        confirm_running(&mut flash);
+        confirm_trial(&mut flash, &c);
         let c = boot_now(&mut flash);
         assert_eq!((c.source, c.trial), (Source::Slot(SlotId::B, 1), false));
         let third = image(3);
@@ -454,8 +465,8 @@ mod tests {
             update(&mut flash, &image(1)).0,
             Status::Done { .. }
         ));
-        boot_now(&mut flash);
-        confirm_running(&mut flash);
+        let c = boot_now(&mut flash);
+        confirm_trial(&mut flash, &c);
         // Slot B holds garbage (a session that stopped half way).
         flash.write(32 * 1024, &[0u8; 64]).unwrap();
         let before = flash.0.bytes().to_vec();
@@ -487,8 +498,7 @@ mod tests {
             Status::Done { .. }
         ));
         let c = boot_now(&mut flash);
-        assert!(c.trial);
-        confirm_running(&mut flash);
+        confirm_trial(&mut flash, &c);
         assert!(!boot_now(&mut flash).trial);
         assert!(matches!(
             update(&mut flash, &image(2)).0,
@@ -496,7 +506,8 @@ mod tests {
         ));
         let c = boot_now(&mut flash);
         assert_eq!((c.source, c.trial), (Source::Slot(SlotId::B, 2), true));
-        assert_eq!(booted(&mut flash).1, image(2));
+        let (off, len) = c.image.unwrap();
+        assert_eq!(flash.mapped(off, len).unwrap(), &image(2)[..]);
         // No confirm: the next boot runs image 1 again and erases slot B.
         let c = boot_now(&mut flash);
         assert_eq!(

@@ -43,6 +43,7 @@ pub fn setup(
     core: cortex_m::Peripherals,
     dp: pac::Peripherals,
 ) -> Devices<Stm32Io, UartTx, DmaIrq, Rx, ModelFlash> {
+    paint_stack();
     let d = match setup::setup(core, dp, spi1_home()) {
         Ok(d) => d,
         Err(e) => {
@@ -76,7 +77,10 @@ pub fn setup(
     let choice = match boot(&mut flash, &STM32F4_LAYOUT) {
         Ok(c) => c,
         Err(e) => {
-            defmt::warn!("model slots: boot work failed ({}); running what they hold", e);
+            defmt::warn!(
+                "model slots: boot work failed ({}); running what they hold",
+                e
+            );
             choose(&mut flash, &STM32F4_LAYOUT)
         }
     };
@@ -130,10 +134,70 @@ fn spi1_home() -> &'static mut Option<embedded_hal_bus::util::AtomicCell<setup::
     }
 }
 
-/// `idle`: sleep until the next interrupt.
+/// The stack's paint, and the window painted at boot (below `setup`'s frame to the CCM's bottom).
+const PAINT: u32 = 0xA5A5_5A5A;
+static PAINTED_BOTTOM: AtomicU32 = AtomicU32::new(0);
+static PAINTED_TOP: AtomicU32 = AtomicU32::new(0);
+
+unsafe extern "C" {
+    static _stack_start: u8;
+    static _stack_end: u8;
+}
+
+/// Paints the CCM stack from 256 bytes below the current frame down to its bottom, so that the
+/// peak use can be read while the unit runs (`stack_peak`).
+fn paint_stack() {
+    let sp = cortex_m::register::msp::read() as usize;
+    let bottom = (&raw const _stack_end) as usize;
+    let top = sp.saturating_sub(256) & !3;
+    let mut p = bottom;
+    while p < top {
+        // SAFETY: [bottom, top) is the CCM stack region below the live frame (memory.x:
+        // `_stack_end` = 0x1000_0000), which nothing else uses; word aligned.
+        unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
+        p += 4;
+    }
+    PAINTED_BOTTOM.store(bottom as u32, Ordering::Relaxed);
+    PAINTED_TOP.store(top as u32, Ordering::Relaxed);
+}
+
+/// The stack's peak use so far, bytes: from its top to the lowest word whose paint was
+/// overwritten (scanning up from the bottom: a frame need not write every word it reserves).
+fn stack_peak() -> u32 {
+    let (bottom, top) = (
+        PAINTED_BOTTOM.load(Ordering::Relaxed) as usize,
+        PAINTED_TOP.load(Ordering::Relaxed) as usize,
+    );
+    let mut p = bottom;
+    // SAFETY: the window `paint_stack` wrote, word aligned, in the CCM.
+    while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
+        p += 4;
+    }
+    ((&raw const _stack_start) as usize).saturating_sub(p) as u32
+}
+
+/// `idle`: sleeps until the next interrupt; once a second (at the lowest priority, about 60,000
+/// cycles) measures the stack's peak, and every 10 s logs it with the sample task's worst cost.
 pub fn idle() -> ! {
+    let mut wakes: u32 = 0;
     loop {
         cortex_m::asm::wfi();
+        wakes = wakes.wrapping_add(1);
+        if wakes.is_multiple_of(200) {
+            let peak = stack_peak();
+            application::STATS
+                .stack_peak
+                .fetch_max(peak, Ordering::Relaxed);
+            if wakes.is_multiple_of(2000) {
+                defmt::info!(
+                    "status: sample task worst {=u32} cycles (of {=u32} a period), stack peak {=u32} B of {=u32}",
+                    application::Stats::get(&application::STATS.worst_task),
+                    CYCLES_PER_PERIOD,
+                    peak,
+                    ((&raw const _stack_start) as usize - (&raw const _stack_end) as usize) as u32
+                );
+            }
+        }
     }
 }
 
