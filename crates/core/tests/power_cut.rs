@@ -1,13 +1,17 @@
-//! The power-loss proof: a full update over the protocol, on a NOR flash model with the STM32F407's
-//! geometry for the two slots (sectors 10 and 11, 128 KiB each, 4-byte program words), cut after
-//! every single write step and torn in the middle of every one; after each cut the next boot must
-//! run exactly the old image or exactly the new one, never a mix and never nothing (when there was
-//! an old one). `cargo xtask ci` runs this test and reads its `POWER-CUT` line.
+//! The power-loss proof: a full update over the protocol and the boots that follow it — the trial
+//! boot that programs the new slot's trial word, the confirm, and the next boot's erase of the old
+//! slot (or, when the trial never confirms, the rollback and the erase of the failed slot) — on a
+//! NOR flash model with the STM32F407's geometry for the two slots (sectors 10 and 11, 128 KiB
+//! each, 4-byte program words), cut after every single write step and torn in the middle of every
+//! one. After each cut the next boot must run exactly the old image or exactly the new one, never
+//! a mix and never nothing (when there was an old one); which one is fixed by where the cut fell;
+//! and the old image's bytes must still be in flash until the new one is confirmed. `cargo xtask
+//! ci` runs this test and reads its `POWER-CUT` line.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 use tcomp_core::image::{Image, write_image};
 use tcomp_core::slots::sim::{Cut, SimNor};
-use tcomp_core::slots::{Layout, SlotId, select};
+use tcomp_core::slots::{Layout, PAYLOAD_AT, SlotId, boot, confirm, select};
 use tcomp_core::update::wire::{Decoder, MAX_FRAME};
 use tcomp_core::update::{Receiver, Sender, Status};
 
@@ -51,12 +55,21 @@ fn validate(flash: &mut Flash, offset: u32, len: u32) -> bool {
         .is_some_and(|b| Image::parse(b).is_ok())
 }
 
-/// What the next boot runs: the payload of the selected slot.
-fn boot(flash: &mut Flash) -> Option<(SlotId, Vec<u8>)> {
-    let active = select(flash, &LAYOUT, validate).unwrap()?;
+/// A boot as the firmware runs it (its trial and erase work included): the payload it runs.
+fn boot_run(flash: &mut Flash) -> Option<(SlotId, Vec<u8>)> {
+    let b = boot(flash, &LAYOUT, None, validate).ok()?;
+    let active = b.active?;
     let at = active.payload(&LAYOUT) as usize;
     let len = active.header.length as usize;
     Some((active.slot, flash.bytes()[at..at + len].to_vec()))
+}
+
+/// Whether `image` lies whole in one of the slots' payloads.
+fn holds(flash: &Flash, image: &[u8]) -> bool {
+    [SlotId::A, SlotId::B].iter().any(|&s| {
+        let at = (LAYOUT.base(s) + PAYLOAD_AT) as usize;
+        flash.bytes().get(at..at + image.len()) == Some(image)
+    })
 }
 
 /// One update as the unit runs it: boot selection, then every request of the host's sender
@@ -89,6 +102,28 @@ fn update(flash: &mut Flash, image: &[u8]) -> Status {
     tx.status()
 }
 
+/// An update's whole life: the transfer, the trial boot, the confirm (`confirmed`) or not, and the
+/// boot after (which erases the old slot, or rolls back and erases the failed one). Stops where
+/// the power fails. Returns the step count when the transfer ended (its commit word).
+fn lifecycle(flash: &mut Flash, new: &[u8], confirmed: bool) -> u32 {
+    let done = matches!(update(flash, new), Status::Done { .. });
+    let commit = flash.steps();
+    if !done || flash.is_dead() {
+        return commit;
+    }
+    let Some((slot, _)) = boot_run(flash) else {
+        return commit;
+    };
+    if flash.is_dead() {
+        return commit;
+    }
+    if confirmed && confirm(flash, &LAYOUT, slot).is_err() {
+        return commit;
+    }
+    let _ = boot_run(flash);
+    commit
+}
+
 #[derive(Default, Debug)]
 struct Tally {
     cut_points: u32,
@@ -98,42 +133,71 @@ struct Tally {
     mixed: u32,
 }
 
-/// Cuts `image`'s update of `before` after and in every step; returns the number of steps.
-fn cut_everywhere(before: &Flash, old: Option<&[u8]>, new: &[u8], tally: &mut Tally) -> u32 {
+/// Cuts an update of `before` to `new` (and its boots) after and in every step; returns the
+/// number of steps. `confirmed`: whether the trial boot confirms the new image.
+fn cut_everywhere(
+    before: &Flash,
+    old: Option<&[u8]>,
+    new: &[u8],
+    confirmed: bool,
+    tally: &mut Tally,
+) -> u32 {
     let mut probe = before.clone();
     probe.plan(Cut::After(u32::MAX));
-    assert!(matches!(update(&mut probe, new), Status::Done { .. }));
+    // The update's own steps end with the commit word; the lifecycle then programs the trial
+    // word, the confirm word (if confirmed), and erases a sector at the boot after (unless it is
+    // blank already).
+    let commit = lifecycle(&mut probe, new, confirmed);
     let steps = probe.steps();
+    let trial = commit + 1;
     for k in 1..=steps {
         for cut in [Cut::After(k), Cut::Torn(k)] {
             let mut flash = before.clone();
             flash.plan(cut);
-            let status = update(&mut flash, new);
+            lifecycle(&mut flash, new, confirmed);
             flash.power_on();
             tally.cut_points += 1;
-            let booted = boot(&mut flash).map(|(_, b)| b);
+            // The old image is in flash, whole, until the confirm word is complete.
+            let confirm_done = confirmed && (k > trial + 1 || cut == Cut::After(trial + 1));
+            if let Some(old) = old
+                && !confirm_done
+            {
+                assert!(
+                    holds(&flash, old),
+                    "{cut:?} of {steps}: the old image is gone"
+                );
+            }
+            let booted = boot_run(&mut flash).map(|(_, b)| b);
             match booted.as_deref() {
                 Some(b) if Some(b) == old => tally.old += 1,
                 Some(b) if b == new => tally.new += 1,
                 None if old.is_none() => tally.empty += 1,
                 _ => tally.mixed += 1,
             }
-            // The commit word is the last step: before it the old image boots, after it the new.
-            if k < steps {
-                assert_eq!(
-                    booted.as_deref(),
-                    old,
-                    "{cut:?} of {steps}: not the old image"
-                );
-                assert!(!matches!(status, Status::Done { .. }));
-            }
-            if cut == Cut::After(steps) {
-                assert_eq!(booted.as_deref(), Some(new), "a committed update must boot");
-            }
+            // Where the cut fell fixes which image runs next: before the commit word is complete
+            // the old one; with it complete and the trial word not yet begun, the new one (this
+            // boot is its trial); with the trial begun and not confirmed, the old one again (the
+            // rollback); once confirmed, the new one.
+            let expect_new = if k < commit {
+                false
+            } else if k == commit {
+                cut == Cut::After(commit)
+            } else if !confirmed {
+                false
+            } else {
+                confirm_done
+            };
+            let want = if expect_new { Some(new) } else { old };
+            assert_eq!(
+                booted.as_deref(),
+                want,
+                "{cut:?} of {steps} (commit {commit}, confirmed {confirmed})"
+            );
             // Now and then, the unit retries after the cut and must end on the new image.
             if k % 97 == 0 {
-                assert!(matches!(update(&mut flash, new), Status::Done { .. }));
-                assert_eq!(boot(&mut flash).map(|(_, b)| b).as_deref(), Some(new));
+                let mut retry = flash.clone();
+                let _ = lifecycle(&mut retry, new, true);
+                assert_eq!(boot_run(&mut retry).map(|(_, b)| b).as_deref(), Some(new));
             }
         }
     }
@@ -147,35 +211,32 @@ fn every_power_cut_boots_the_old_or_the_new_image() {
 
     // A first update onto erased flash: a cut leaves no models or the new ones.
     let erased = Box::new(Flash::new());
-    let first_steps = cut_everywhere(&erased, None, &one, &mut tally);
+    let first_steps = cut_everywhere(&erased, None, &one, true, &mut tally);
 
-    // A second update after the first (slot A active, B written) …
+    // A second update after the first, confirmed (slot A active, B written) …
     let mut with_one = erased.clone();
-    assert!(matches!(
-        update(&mut with_one, &one),
-        Status::Done {
-            slot: SlotId::A,
-            generation: 1
-        }
-    ));
-    let second_steps = cut_everywhere(&with_one, Some(&one), &two, &mut tally);
+    let _ = lifecycle(&mut with_one, &one, true);
+    assert_eq!(boot_run(&mut with_one), Some((SlotId::A, one.clone())));
+    let second_steps = cut_everywhere(&with_one, Some(&one), &two, true, &mut tally);
 
-    // … and a third (B active, A — holding the first image — erased and rewritten).
+    // … its trial never confirmed: every cut, and the end, leaves the first image running …
+    let failed_steps = cut_everywhere(&with_one, Some(&one), &two, false, &mut tally);
+    let mut rolled = with_one.clone();
+    let _ = lifecycle(&mut rolled, &two, false);
+    assert_eq!(boot_run(&mut rolled), Some((SlotId::A, one.clone())));
+
+    // … and a third (B active, A — holding the first image — erased at boot and rewritten).
     let mut with_two = with_one.clone();
-    assert!(matches!(
-        update(&mut with_two, &two),
-        Status::Done {
-            slot: SlotId::B,
-            generation: 2
-        }
-    ));
-    let third_steps = cut_everywhere(&with_two, Some(&two), &three, &mut tally);
+    let _ = lifecycle(&mut with_two, &two, true);
+    assert_eq!(boot_run(&mut with_two), Some((SlotId::B, two.clone())));
+    let third_steps = cut_everywhere(&with_two, Some(&two), &three, true, &mut tally);
 
     println!(
-        "POWER-CUT cut_points={} steps_per_update={},{},{} old={} new={} empty={} mixed={}",
+        "POWER-CUT cut_points={} steps_per_update={},{},{},{} old={} new={} empty={} mixed={}",
         tally.cut_points,
         first_steps,
         second_steps,
+        failed_steps,
         third_steps,
         tally.old,
         tally.new,
@@ -185,10 +246,11 @@ fn every_power_cut_boots_the_old_or_the_new_image() {
     // Every step of each update, cut after it and torn within it.
     assert_eq!(
         tally.cut_points,
-        2 * (first_steps + second_steps + third_steps)
+        2 * (first_steps + second_steps + failed_steps + third_steps)
     );
-    // One sector erase, five header words, the payload's words, the commit word.
-    assert_eq!(second_steps as usize, 1 + 5 + two.len().div_ceil(4) + 1);
+    // One sector erase, five header words, the payload's words, the commit word; then the trial
+    // word, the confirm word and the boot's erase of the old slot.
+    assert_eq!(second_steps as usize, 1 + 5 + two.len().div_ceil(4) + 1 + 3);
     assert_eq!(tally.mixed, 0);
     assert!(tally.old > 0 && tally.new > 0 && tally.empty > 0);
 }
