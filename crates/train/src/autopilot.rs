@@ -632,14 +632,30 @@ fn f32s(v: &[f64]) -> Vec<f32> {
 /// The autopilot's thermal calibration of every IMU instance in the log at `path`, as its tool
 /// computes it (see the module doc).
 pub fn from_log(path: &std::path::Path) -> Result<ParamFile, crate::TrainError> {
-    use crate::dataset::log::{self, Kind};
-    let file = path.display().to_string();
+    let (kind, tables) = read_log(path)?;
+    fit_tables(&path.display().to_string(), kind, &tables)
+}
+
+/// The log at `path`, refused when it is not an autopilot log.
+fn read_log(
+    path: &std::path::Path,
+) -> Result<(crate::dataset::log::Kind, crate::dataset::log::Tables), crate::TrainError> {
     let not_log = || crate::DataError::LogColumn {
-        file: file.clone(),
+        file: path.display().to_string(),
         what: "not an autopilot log (.ulg or DataFlash .bin): autopilot parameters come from one"
             .into(),
     };
-    let (kind, tables) = log::read(path)?.ok_or_else(not_log)?;
+    Ok(crate::dataset::log::read(path)?.ok_or_else(not_log)?)
+}
+
+/// The autopilot's calibration of every IMU instance in `tables` (see [`from_log`]).
+fn fit_tables(
+    file: &str,
+    kind: crate::dataset::log::Kind,
+    tables: &crate::dataset::log::Tables,
+) -> Result<ParamFile, crate::TrainError> {
+    use crate::dataset::log::{self, Kind};
+    let file = file.to_string();
     let mut out = ParamFile {
         format: if kind == Kind::ULog {
             "px4"
@@ -774,4 +790,200 @@ pub fn from_log(path: &std::path::Path) -> Result<ParamFile, crate::TrainError> 
         .into());
     }
     Ok(out)
+}
+
+/// What the autopilot's cubic leaves on one axis over the held-out part of a log.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct HeldOutAxis {
+    /// The axis as `--data` names it (`IMU[1].GyrZ`, `sensor_gyro[0].x`).
+    pub column: String,
+    /// Its instance's temperature, as `--data` names it (`IMU[1].T`).
+    pub temperature: String,
+    /// Held-out records.
+    pub rows: usize,
+    /// The held-out records' temperature range (°C).
+    pub held_out_range: [f64; 2],
+    /// The cubic's `[TMIN, TMAX]` (°C), fitted before the split; the firmware clamps to it.
+    pub fitted_range: [f64; 2],
+    /// Standard deviation of the axis over the held-out records, nothing removed.
+    pub raw_std: f64,
+    /// Standard deviation of what the cubic leaves there: the axis less the correction the
+    /// firmware applies (ArduPilot: after the log's own calibration is taken out, as the tool
+    /// does).
+    pub cubic_std: f64,
+    /// The axis' records over the whole log as the cubic saw them (`time_s`, the temperature
+    /// and the axis; ArduPilot: the log's own calibration taken out), for fitting another model
+    /// to the same signal.
+    #[serde(skip)]
+    pub data: crate::Dataset,
+}
+
+/// Population standard deviation (`numpy.std`): the spread a constant offset does not change.
+/// Standard deviations, not RMS, because both autopilots leave the constant to another
+/// calibration (ArduPilot drops it, PX4's gyro offsets are re-estimated at boot).
+pub fn std(v: &[f64]) -> f64 {
+    let n = v.len() as f64;
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mean = v.iter().sum::<f64>() / n;
+    (v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n).sqrt()
+}
+
+/// `tables` with only the records whose timestamp is before `until_s` (the log's seconds).
+fn before(tables: &crate::dataset::log::Tables, until_s: f64) -> crate::dataset::log::Tables {
+    let mut t = tables.clone();
+    for m in &mut t.messages {
+        let n = m.time_us.partition_point(|&u| (u as f64) * 1e-6 < until_s);
+        m.time_us.truncate(n);
+        m.records.truncate(n);
+        for (_, v) in &mut m.fields {
+            v.truncate(n);
+        }
+    }
+    t
+}
+
+/// The autopilot's own cubic fitted (by [`from_log`]'s procedure) on the records before `from_s`
+/// (seconds, the log's time: `time_s`), and what it leaves on every axis over the records from
+/// `from_s` on: the held-out half of the side-by-side with tcomp's model (`tcomp
+/// autopilot-params --held-out-from`). Errors as [`from_log`]'s, and when no instance has
+/// held-out records.
+pub fn held_out(
+    path: &std::path::Path,
+    from_s: f64,
+) -> Result<(ParamFile, Vec<HeldOutAxis>), crate::TrainError> {
+    use crate::dataset::log::Kind;
+    let file = path.display().to_string();
+    let (kind, tables) = read_log(path)?;
+    let fitted = fit_tables(&file, kind, &before(&tables, from_s))?;
+    let col = |m: &crate::dataset::log::Message, f: &str| {
+        m.fields
+            .iter()
+            .find(|(n, _)| n == f)
+            .map(|(_, v)| v.clone())
+    };
+    let range = |t: &[f64]| {
+        t.iter()
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[l, h], v| {
+                [l.min(*v), h.max(*v)]
+            })
+    };
+    // One axis: its held-out rows' temperature and values, and the correction at each row.
+    let axis = |m: &crate::dataset::log::Message,
+                field: &str,
+                tfield: &str,
+                t: &[f64],
+                v: &[f64],
+                fitted_range: [f64; 2],
+                correction: &dyn Fn(f64) -> f64|
+     -> Option<HeldOutAxis> {
+        let k = m.time_us.partition_point(|&u| (u as f64) * 1e-6 < from_s);
+        let (th, vh) = (t.get(k..)?, v.get(k..)?);
+        if th.is_empty() {
+            return None;
+        }
+        let left: Vec<f64> = th.iter().zip(vh).map(|(t, v)| v - correction(*t)).collect();
+        let label = tables.label(m);
+        let (column, temperature) = (format!("{label}.{field}"), format!("{label}.{tfield}"));
+        let time: Vec<f64> = m.time_us.iter().map(|&u| u as f64 * 1e-6).collect();
+        let data = crate::Dataset::from_parts(
+            &format!("{file}#{label}"),
+            vec!["time_s".into(), temperature.clone(), column.clone()],
+            vec![time, t.to_vec(), v.to_vec()],
+            m.records.clone(),
+        );
+        Some(HeldOutAxis {
+            column,
+            temperature,
+            rows: th.len(),
+            held_out_range: range(th),
+            fitted_range,
+            raw_std: std(vh),
+            cubic_std: std(&left),
+            data,
+        })
+    };
+    let mut out = Vec::new();
+    match kind {
+        Kind::ULog => {
+            for s in &fitted.px4 {
+                let topic = if s.kind == 'G' {
+                    "sensor_gyro"
+                } else {
+                    "sensor_accel"
+                };
+                let Some(m) = tables.message(topic, s.instance) else {
+                    continue;
+                };
+                let Some(t) = col(m, "temperature") else {
+                    continue;
+                };
+                // the tool's single-precision temperatures
+                let t: Vec<f64> = t.iter().map(|x| f64::from(*x as f32)).collect();
+                for (a, field) in ["x", "y", "z"].iter().enumerate() {
+                    let Some(v) = col(m, field) else { continue };
+                    let fr = [f64::from(s.tmin), f64::from(s.tmax)];
+                    out.extend(axis(m, field, "temperature", &t, &v, fr, &|t| {
+                        s.offset(a, t)
+                    }));
+                }
+            }
+        }
+        Kind::DataFlash => {
+            let cal = LogCalibration::from_params(&tables.params);
+            for s in &fitted.ardupilot {
+                let Some(m) = tables.message("IMU", s.instance) else {
+                    continue;
+                };
+                let names = ["T", "AccX", "AccY", "AccZ", "GyrX", "GyrY", "GyrZ"];
+                let cols: Vec<Option<Vec<f64>>> = names.iter().map(|n| col(m, n)).collect();
+                let Ok(
+                    [
+                        Some(t),
+                        Some(ax),
+                        Some(ay),
+                        Some(az),
+                        Some(gx),
+                        Some(gy),
+                        Some(gz),
+                    ],
+                ) = <[Option<Vec<f64>>; 7]>::try_from(cols)
+                else {
+                    continue;
+                };
+                let (mut acc, mut gyr) = ([ax, ay, az], [gx, gy, gz]);
+                cal.remove(usize::from(s.instance), &t, &mut acc, &mut gyr);
+                let fr = [s.tmin, s.tmax];
+                // The firmware's correction: the cubic (constant dropped) at the clamped
+                // temperature; what it adds at the calibration temperature is a constant.
+                let cubic = |p: [f64; 4]| {
+                    move |t: f64| {
+                        polyval(&[p[0], p[1], p[2], 0.0], t.clamp(fr[0], fr[1]) - ARDU_TREF)
+                    }
+                };
+                for (kind, values, polys) in [("Acc", &acc, &s.acc), ("Gyr", &gyr, &s.gyr)] {
+                    for (a, label) in ["X", "Y", "Z"].iter().enumerate() {
+                        let (Some(v), Some(p)) = (values.get(a), polys.get(a)) else {
+                            continue;
+                        };
+                        let f = cubic(*p);
+                        out.extend(axis(m, &format!("{kind}{label}"), "T", &t, v, fr, &f));
+                    }
+                }
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err(crate::DataError::LogColumn {
+            file,
+            what: format!(
+                "no IMU record from {} s on: nothing held out to compare on (the log's IMU \
+                 records end earlier)",
+                crate::options::num(from_s)
+            ),
+        }
+        .into());
+    }
+    Ok((fitted, out))
 }

@@ -122,7 +122,7 @@ pub struct Tables {
 impl Tables {
     /// The name of a message as columns spell it: `IMU` when it has one instance, `IMU[k]` when
     /// it has several.
-    fn label(&self, m: &Message) -> String {
+    pub fn label(&self, m: &Message) -> String {
         let several = self
             .messages
             .iter()
