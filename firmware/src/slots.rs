@@ -225,6 +225,13 @@ mod tests {
 
     type Flash = SimNor<{ 64 * 1024 }, { 32 * 1024 }>;
 
+    /// [`validates`] as the update receiver's check before the commit.
+    fn check(bytes: &[u8], off: u32, len: u32) -> Result<(), tcomp_core::update::Reason> {
+        validates(bytes, off, len)
+            .then_some(())
+            .ok_or(tcomp_core::update::Reason::Invalid)
+    }
+
     fn image(seed: u8) -> Vec<u8> {
         let blob: Vec<u8> = (0..500u32).map(|i| (i as u8) ^ seed).collect();
         let mut buf = vec![0u8; 4096];
@@ -238,13 +245,13 @@ mod tests {
         let region = flash.bytes().to_vec();
         let choice = choose(&mut Mapped(&region), &QEMU_LAYOUT, &region);
         let mut task = UpdateTask::new(QEMU_LAYOUT, choice.active);
-        let mut tx = Sender::new(new);
+        let mut tx = Sender::new(new, 1);
         let mut host = Decoder::new();
         let mut frame = [0u8; MAX_FRAME];
         while let Some(n) = tx.request(&mut frame) {
             for &b in &frame[..n] {
                 let mut reply = [0u8; MAX_REPLY];
-                let validate = |f: &mut Flash, off, len| validates(f.bytes(), off, len);
+                let validate = |f: &mut Flash, off, len| check(f.bytes(), off, len);
                 if let Some(m) = task.push(b, flash, b"SN", validate, &mut reply) {
                     for &r in &reply[..m] {
                         if let Some(p) = host.push(r) {
@@ -366,7 +373,7 @@ mod tests {
 
         let mut task = UpdateTask::new(QEMU_LAYOUT, active);
         let new = image(2);
-        let mut tx = Sender::new(&new);
+        let mut tx = Sender::new(&new, 1);
         let mut host = Decoder::new();
         let mut frame = [0u8; MAX_FRAME];
         let mut erases = 0;
@@ -384,7 +391,7 @@ mod tests {
                 };
                 let mut reply = [0u8; MAX_REPLY];
                 let validate = |f: &mut Windowed<'_, &mut Counting<'_>>, off, len| {
-                    validates(f.flash.inner.bytes(), off, len)
+                    check(f.flash.inner.bytes(), off, len)
                 };
                 let answer = task.push(b, &mut window, b"SN", validate, &mut reply);
                 erases += counting.erases;

@@ -9,7 +9,7 @@
 use embedded_storage::nor_flash::NorFlash;
 use tcomp_core::slots::{Active, Layout, SlotId};
 use tcomp_core::update::wire::{HEADER_LEN, MAX_SERIAL};
-use tcomp_core::update::{Decoder, Receiver};
+use tcomp_core::update::{Decoder, Reason, Receiver};
 
 /// The longest reply frame (INFO with the longest serial).
 pub const MAX_REPLY: usize = HEADER_LEN + 9 + MAX_SERIAL + 4;
@@ -32,13 +32,14 @@ impl UpdateTask {
 
     /// Feeds one received byte; when it completes a request, handles it and encodes the reply into
     /// `reply`, returning its length. `serial` is the unit's serial number; `validate(flash,
-    /// offset, len)` says whether the written slot holds a readable image.
+    /// offset, len)` says whether the written slot holds an image this unit may run, and if not
+    /// why ([`crate::image::acceptable`] is the check the boards use).
     pub fn push<F: NorFlash>(
         &mut self,
         byte: u8,
         flash: &mut F,
         serial: &[u8],
-        validate: impl FnOnce(&mut F, u32, u32) -> bool,
+        validate: impl FnOnce(&mut F, u32, u32) -> Result<(), Reason>,
         reply: &mut [u8; MAX_REPLY],
     ) -> Option<usize> {
         let request = self.decoder.push(byte)?;

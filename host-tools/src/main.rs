@@ -37,8 +37,8 @@ enum Command {
     Eval(cmd::eval::Args),
     /// Simulate temperature-chamber runs with known physics: train.csv, verify.csv and truth.json.
     Simulate(cmd::simulate::Args),
-    /// Pack model blobs, checked against a board description, into the calibration image flashed
-    /// at 0x003F0000.
+    /// Pack model blobs, checked against a board description, into a unit's calibration image.
+    #[command(about = cmd::image::about())]
     Image(cmd::image::Args),
     /// Where a model fails and which physical effect is most likely missing (with the evidence).
     Diagnose(cmd::diagnose::Args),

@@ -69,7 +69,11 @@ fn unit(mut port: TTYPort, stop: Arc<AtomicBool>) -> Flash {
         let mut out = Vec::new();
         for &b in &buf[..n] {
             if let Some(p) = decoder.push(b) {
-                let reply = rx.handle(&mut flash, &p, b"SN-PTY-7", validate);
+                let reply = rx.handle(&mut flash, &p, b"SN-PTY-7", |f, o, l| {
+                    validate(f, o, l)
+                        .then_some(())
+                        .ok_or(tcomp_core::update::Reason::Invalid)
+                });
                 data_seen += usize::from(p.kind == Kind::Data);
                 if p.kind == Kind::Data && data_seen == 2 {
                     continue; // this reply is lost
@@ -112,7 +116,7 @@ fn an_update_over_a_pty_commits_and_keeps_the_output_frames() {
     let unit_stop = Arc::clone(&stop);
     let unit = std::thread::spawn(move || unit(master, unit_stop));
     let out = Command::new(env!("CARGO_BIN_EXE_tcomp"))
-        .args(["flash", "--port", &name, "--timeout-ms", "200", "--json"])
+        .args(["flash", "--port", &name, "--baud", "921600", "--json"])
         .arg(&path)
         .output()
         .unwrap();
@@ -149,7 +153,7 @@ fn a_bad_image_is_refused_before_the_port_is_opened() {
     let path = dir.path().join("junk.bin");
     std::fs::write(&path, b"not an image at all").unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_tcomp"))
-        .args(["flash", "--port", "/nonexistent/tty"])
+        .args(["flash", "--port", "/nonexistent/tty", "--baud", "921600"])
         .arg(&path)
         .output()
         .unwrap();
@@ -164,4 +168,39 @@ fn a_bad_image_is_refused_before_the_port_is_opened() {
         "the port must not be touched: {err}"
     );
     assert!(out.stdout.is_empty());
+}
+
+/// The help names the product board's model address (not only QEMU's), and `tcomp flash` takes its
+/// rate from the description or refuses to guess one.
+#[test]
+fn the_help_names_the_boards_address_and_flash_needs_a_rate() {
+    let help = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+        .args(["image", "--help"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        text.contains("0x080C0000 on the STM32F407 board") && text.contains("0x003F0000"),
+        "{text}"
+    );
+    let help = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+        .args(["flash", "--help"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        text.contains("--board <FILE>") && text.contains("[link] baud"),
+        "{text}"
+    );
+    assert!(!text.contains("115200"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("models.bin");
+    std::fs::write(&path, image()).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+        .args(["flash", "--port", "/nonexistent/tty"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "clap's usage error");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--board"));
 }

@@ -9,7 +9,7 @@ use tcomp_core::image::{Image, write_image};
 use tcomp_core::slots::sim::{Cut, SimNor};
 use tcomp_core::slots::{Layout, SlotId, select};
 use tcomp_core::update::wire::{Decoder, MAX_FRAME};
-use tcomp_core::update::{Receiver, Sender, Status};
+use tcomp_core::update::{Reason, Receiver, Sender, Status};
 
 const SECTOR: usize = 128 * 1024;
 type Flash = SimNor<{ 2 * SECTOR }, SECTOR>;
@@ -51,6 +51,13 @@ fn validate(flash: &mut Flash, offset: u32, len: u32) -> bool {
         .is_some_and(|b| Image::parse(b).is_ok())
 }
 
+/// [`validate`] as the receiver's check before the commit.
+fn check(flash: &mut Flash, offset: u32, len: u32) -> Result<(), Reason> {
+    validate(flash, offset, len)
+        .then_some(())
+        .ok_or(Reason::Invalid)
+}
+
 /// What the next boot runs: the payload of the selected slot.
 fn boot(flash: &mut Flash) -> Option<(SlotId, Vec<u8>)> {
     let active = select(flash, &LAYOUT, validate).unwrap()?;
@@ -64,14 +71,14 @@ fn boot(flash: &mut Flash) -> Option<(SlotId, Vec<u8>)> {
 fn update(flash: &mut Flash, image: &[u8]) -> Status {
     let active = select(flash, &LAYOUT, validate).unwrap();
     let mut rx = Receiver::new(LAYOUT, active);
-    let mut tx = Sender::new(image);
+    let mut tx = Sender::new(image, 1);
     let (mut unit_in, mut host_in) = (Decoder::new(), Decoder::new());
     let mut frame = [0u8; MAX_FRAME];
     while let Some(n) = tx.request(&mut frame) {
         let mut reply_bytes = Vec::new();
         for &b in &frame[..n] {
             if let Some(p) = unit_in.push(b) {
-                let reply = rx.handle(flash, &p, b"SN-TEST", validate);
+                let reply = rx.handle(flash, &p, b"SN-TEST", check);
                 let mut out = [0u8; MAX_FRAME];
                 let m = reply.packet().encode(&mut out).unwrap();
                 reply_bytes.extend_from_slice(&out[..m]);

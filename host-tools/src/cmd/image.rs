@@ -1,7 +1,9 @@
 //! `tcomp image --board FILE --serial N --model ID=FILE.tcm … --out models.bin`: the calibration
-//! image the firmware reads from its `MODELS` flash region (0x003F_0000, 64 KiB), flashed on its own
-//! without rebuilding the firmware, e.g.
-//! `probe-rs download --binary-format bin --base-address 0x3F0000 models.bin`.
+//! image a unit runs from one of its two model slots, sent with `tcomp flash` or written bare at
+//! the start of the board's `MODELS` region by a probe, without rebuilding the firmware, e.g.
+//! `probe-rs download --binary-format bin --base-address 0x080C0000 models.bin` on the STM32F407
+//! board. The addresses in the help come from one table (`tcomp_board_description::targets`),
+//! checked against the firmware's memory maps.
 //!
 //! The layout is `tcomp_core::image`'s (documented there), written by its `ImageSpec::write`: the
 //! firmware reads the image with the same module, so the two sides cannot disagree. Before
@@ -14,10 +16,25 @@ use clap::Args as ClapArgs;
 use std::path::{Path, PathBuf};
 use tcomp_core::image::{Entry, Fnv64, ImageSpec, MAX_ENTRIES, Mismatch, Provenance};
 
-use tcomp_board_description::Board;
+use tcomp_board_description::{Board, targets};
 
-/// Size of the firmware's `MODELS` region.
-const REGION_BYTES: usize = 64 * 1024;
+/// The largest image any board's slot holds (its capacity: the slot less its header).
+fn largest_slot_capacity() -> usize {
+    targets::TARGETS
+        .iter()
+        .map(|t| t.slot_bytes as usize - tcomp_core::slots::PAYLOAD_AT as usize)
+        .max()
+        .unwrap_or(0)
+}
+
+/// `tcomp image`'s one-line help: what the image is and where it goes, with each board's address.
+pub fn about() -> String {
+    format!(
+        "Pack model blobs, checked against a board description, into a unit's calibration image: \
+         sent with `tcomp flash`, or written bare by a probe at the MODELS region ({})",
+        targets::probe_addresses()
+    )
+}
 
 /// Arguments of `tcomp image`.
 #[derive(ClapArgs)]
@@ -259,8 +276,9 @@ pub fn build(
         entries: &entries,
     };
     let len = spec.image_len()?;
-    if len > REGION_BYTES {
-        bail!("the image is {len} bytes, more than the {REGION_BYTES}-byte MODELS region");
+    let capacity = largest_slot_capacity();
+    if len > capacity {
+        bail!("the image is {len} bytes, more than a model slot holds ({capacity} bytes)");
     }
     let mut image = vec![0u8; len];
     spec.write(&mut image)?;
@@ -313,13 +331,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         return Ok(());
     }
     outln!(
-        "wrote {} ({} bytes, {} models for board {} (hash {:016x}), unit {}): flash it at 0x003F0000",
+        "wrote {} ({} bytes, {} models for board {} (hash {:016x}), unit {}): send it with `tcomp flash`, or write it bare at {}",
         args.out.display(),
         image.len(),
         blobs.len(),
         super::printable::text(&board.name),
         board.hash(),
-        args.serial
+        args.serial,
+        targets::probe_addresses()
     );
     Ok(())
 }

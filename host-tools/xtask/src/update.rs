@@ -37,7 +37,19 @@ pub fn run(
     let mut to_decoder = decoder.stdin.take().context("defmt-print stdin")?;
     let pump = std::thread::spawn(move || std::io::copy(&mut stdout, &mut to_decoder));
     let flash = Command::new(work.join("../debug/tcomp"))
-        .args(["flash", "--port", &pty, "--json", "--timeout-ms", "1000"])
+        .args([
+            "flash",
+            "--port",
+            &pty,
+            "--json",
+            "--timeout-ms",
+            "1000",
+            "--board",
+        ])
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../firmware/descriptions/imu6-rlg-qma.toml"
+        ))
         .arg(update)
         .output()
         .context("running tcomp flash")?;

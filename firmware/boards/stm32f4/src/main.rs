@@ -94,10 +94,11 @@ mod app {
     use stm32f4xx_hal::timer::Flag;
     use tcomp_core::frame::{BootReport, MAX_FRAME_LEN};
     use tcomp_core::slots::Active;
+    use tcomp_core::update::Reason;
     use tcomp_firmware::app::{App, MAX_CHANNELS, Record, status};
     use tcomp_firmware::boot::REPORT_PERIODS;
-    use tcomp_firmware::image::check_unit;
-    use tcomp_firmware::slots::{STM32F4_LAYOUT, Windowed, erase_inactive, validates};
+    use tcomp_firmware::image::acceptable;
+    use tcomp_firmware::slots::{STM32F4_LAYOUT, Windowed, erase_inactive};
     use tcomp_firmware::update::{MAX_REPLY, UpdateTask, serial_text};
 
     use crate::setup::{
@@ -333,10 +334,9 @@ mod app {
             let unit = *l.unit;
             let validate = |w: &mut Windowed<'_, _>, off: u32, len: u32| {
                 let at = off as usize;
-                validates(w.mapped, off, len)
-                    && w.mapped
-                        .get(at..at.saturating_add(len as usize))
-                        .is_some_and(|b| check_unit(b, unit).is_ok())
+                w.mapped
+                    .get(at..at.saturating_add(len as usize))
+                    .map_or(Err(Reason::Flash), |b| acceptable(b, unit))
             };
             if let Some(n) = l
                 .update

@@ -7,7 +7,7 @@
 //! | sample timer | TIM2 (32-bit) | — | 1 MHz tick, update every 5,000 ticks (200 Hz) |
 //! | thermometers | SPI1, 12 × ADS1220 | SCK PA5, MISO PA6, MOSI PA7; CS PE0–PE11; DRDY PD0–PD11 (inputs: each conversion read once, when ready) | mode 1, ≤ 5 MHz |
 //! | counter block | SPI2, FPGA | SCK PB13, MISO PB14, MOSI PB15, CS PB12 | mode 0, ≤ 10 MHz |
-//! | frames out | USART1 TX | PA9 | 921,600 baud 8N1 |
+//! | frames out | USART1 TX | PA9 | 921,600 baud 8N1 (the description's `[link] baud`) |
 //! | model updates in | USART1 RX | PA10 | same link: `tcomp flash` (framed protocol, replies between frames) |
 //! | watchdog | IWDG | — | 50 ms (ten periods) |
 //!
@@ -49,8 +49,9 @@ pub const CYCLES_PER_PERIOD: u32 = SYSCLK_HZ / 1_000_000 * TICKS_PER_PERIOD;
 pub const THERMOMETERS: usize = 12;
 /// Counter-block channels used.
 pub const COUNTERS: usize = 6;
-/// UART baud rate.
-pub const BAUD: u32 = 921_600;
+/// UART baud rate: the board description's `[link] baud` (`build.rs`, `tcomp_firmware::wiring`),
+/// the rate `tcomp flash --board` opens the port at.
+pub const BAUD: u32 = crate::LINK_BAUD;
 /// Watchdog timeout.
 pub const WATCHDOG_MS: u32 = 50;
 /// PT100 reference resistor on each ADS1220, Ω.

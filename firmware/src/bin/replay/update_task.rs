@@ -3,8 +3,8 @@
 
 use super::*;
 use tcomp_core::slots::Active;
-use tcomp_firmware::image::check_unit;
-use tcomp_firmware::slots::validates;
+use tcomp_core::update::Reason;
+use tcomp_firmware::image::acceptable;
 use tcomp_firmware::update::{MAX_REPLY, UpdateTask};
 
 /// What the receive interrupt owns.
@@ -55,7 +55,7 @@ pub(super) fn on_receive() {
         // refused before the commit, so the unit keeps its models.
         let validate = |f: &mut RamFlash, off, len| {
             f.bytes(off, len)
-                .is_some_and(|b| validates(b, 0, len) && check_unit(b, UNIT_SERIAL).is_ok())
+                .map_or(Err(Reason::Flash), |b| acceptable(b, UNIT_SERIAL))
         };
         if let Some(n) = u
             .task

@@ -1,12 +1,25 @@
 //! The update over any byte link (`Read + Write`): a serial port for `tcomp flash`, a pair of pipes
 //! in the tests. Requests go out one at a time; the bytes that come back are fed to two decoders,
 //! the update replies' and the output frames', each skipping the other's frames as garbage.
+//!
+//! An update that fails while the unit holds its session (the link died mid-transfer) ends with
+//! one ABORT, best effort: the unit's active slot is untouched either way, and the next run's
+//! BEGIN (another session number) takes over what is left open.
 
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
 use tcomp_core::frame;
 use tcomp_core::update::wire::{Decoder, MAX_FRAME};
 use tcomp_core::update::{Info, Sender, Status};
+
+/// How long to wait for replies.
+#[derive(Clone, Copy, Debug)]
+pub struct Timing {
+    /// For every request but COMMIT.
+    pub reply: Duration,
+    /// For COMMIT: the unit reads its slot back and checks the image and its signature first.
+    pub commit: Duration,
+}
 
 /// What an update did.
 #[derive(Clone, Debug)]
@@ -17,6 +30,8 @@ pub struct Outcome {
     pub info: Option<Info>,
     /// Requests sent again.
     pub repeats: u32,
+    /// Whether an ABORT was sent (the update failed while the unit held its session).
+    pub aborted: bool,
     /// The unit's output frames seen meanwhile.
     pub output: frame::Stats,
     /// Their first and last sequence numbers.
@@ -25,17 +40,19 @@ pub struct Outcome {
     pub last_sequence: Option<u32>,
 }
 
-/// Sends `image` and waits for each reply up to `timeout`; `progress(sent, total)` after each ACK.
+/// Sends `image` in session `session` and waits for each reply as `timing` says;
+/// `progress(sent, total)` after each ACK.
 /// The output frames are counted from the unit's first reply (INFO) to its last: what came before
 /// is not part of the update (and a port opened a moment ago may have passed it through a line
 /// discipline that was not raw yet).
 pub fn transfer<L: Read + Write>(
     link: &mut L,
     image: &[u8],
-    timeout: Duration,
+    session: u32,
+    timing: Timing,
     mut progress: impl FnMut(u32, u32),
 ) -> std::io::Result<Outcome> {
-    let mut tx = Sender::new(image);
+    let mut tx = Sender::new(image, session);
     let mut replies = Decoder::new();
     let mut outputs = frame::Decoder::new();
     let (mut first, mut last) = (None, None);
@@ -52,7 +69,12 @@ pub fn transfer<L: Read + Write>(
             _ => {}
         }
         let seq = tx.seq();
-        let deadline = Instant::now() + timeout;
+        let wait = if tx.is_committing() {
+            timing.commit.max(timing.reply)
+        } else {
+            timing.reply
+        };
+        let deadline = Instant::now() + wait;
         let answered = loop {
             let got = match link.read(&mut buf) {
                 Ok(0) => 0,
@@ -102,6 +124,7 @@ pub fn transfer<L: Read + Write>(
         status: tx.status(),
         info: tx.info(),
         repeats: tx.repeats(),
+        aborted: tx.aborted(),
         output: outputs.stats(),
         first_sequence: first,
         last_sequence: last,
