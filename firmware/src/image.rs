@@ -22,24 +22,12 @@ pub use tcomp_core::image::{
 };
 
 use crate::app::{ChannelConfig, MAX_CHANNELS, MAX_COUNTERS, MAX_THERMOMETERS};
-use tcomp_core::update::Reason;
 
 /// Whether `image` may run on the unit whose serial is `unit_serial` (see
 /// [`Image::check_unit`]); the boot path calls it, and an update can call it before it commits a
 /// new image. A version-1 image names no unit and passes.
 pub fn check_unit(image: &[u8], unit_serial: u64) -> Result<(), ImageError> {
     Image::parse(image)?.check_unit(unit_serial)
-}
-
-/// Whether `image` (an update's slot payload, or a region starting with an image) may run on the
-/// unit `unit_serial`: it reads, and it was made for this unit. The reason is the update's RESULT:
-/// the update task runs this before it writes the commit word, so a refused image is never
-/// committed and the unit keeps its models.
-pub fn acceptable(image: &[u8], unit_serial: u64) -> Result<(), Reason> {
-    let parsed = Image::parse(image).map_err(|_| Reason::Invalid)?;
-    parsed
-        .check_unit(unit_serial)
-        .map_err(|_| Reason::OtherUnit)
 }
 
 /// Why an image's channel table cannot run on this firmware and board.

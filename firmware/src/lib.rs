@@ -1,7 +1,8 @@
 //! The firmware: the compensation loop ([`app`]), the fault record kept across resets ([`fault`]),
 //! the time-base check ([`timing`]), the boot report ([`boot`]), the channel tables generated from
 //! the board descriptions ([`wiring`]),
-//! the model-blob image in flash ([`image`]) and its two slots ([`slots`]), the update task that
+//! the model-blob image in flash ([`image`]) and its two slots ([`slots`]), which images the unit
+//! runs (made for it, signed by a provisioned key: [`trust`]), the update task that
 //! rewrites them over the serial link ([`update`]), the replay board of the QEMU run ([`replay`]), and
 //! board support for the binaries (semihosting exit codes, the SysTick instruction counter).
 //!
@@ -22,6 +23,7 @@ pub mod image;
 pub mod replay;
 pub mod slots;
 pub mod timing;
+pub mod trust;
 pub mod update;
 pub mod wiring;
 

@@ -9,9 +9,12 @@
 //! `probe-rs download` or QEMU's loader put there, and an update then writes slot B and wins.
 //! Failing both, no models: every channel runs `NO_MODEL`.
 
+use crate::trust::Signer;
+use core::cell::Cell;
 use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 use tcomp_core::image::Image;
 use tcomp_core::slots::{Active, Header, Layout, SlotId, select};
+use tcomp_core::update::Reason;
 
 /// mps2-an386: `MODELS` is 64 KiB at `0x003F_0000`: slot A at its start, slot B at `0x003F_8000`.
 pub const QEMU_LAYOUT: Layout = Layout {
@@ -48,6 +51,12 @@ pub struct Choice<'a> {
     pub active: Option<Active>,
     /// Where the image came from.
     pub source: Source,
+    /// Who vouches for it (`None` without an image).
+    pub signer: Option<Signer>,
+    /// Why the last image considered and passed over was refused (a slot or a probe's image
+    /// that reads but fails the caller's check: another unit, unsigned, an unknown key, a bad
+    /// signature), for the boot report when nothing runs.
+    pub refused: Option<Reason>,
 }
 
 /// Does `bytes[offset..offset + len]` hold an image the loop can read.
@@ -59,26 +68,66 @@ pub fn validates(bytes: &[u8], offset: u32, len: u32) -> bool {
 }
 
 /// Chooses the image to run from `region` (the whole `MODELS` region, memory-mapped), reading
-/// headers through `flash` (the same memory as a [`ReadNorFlash`]). A flash read error counts as
-/// "no slot".
-pub fn choose<'a, F: ReadNorFlash>(flash: &mut F, layout: &Layout, region: &'a [u8]) -> Choice<'a> {
-    if let Ok(Some(active)) = select(flash, layout, |_, off, len| validates(region, off, len)) {
+/// headers through `flash` (the same memory as a [`ReadNorFlash`]). `accept(image)` is the unit's
+/// check of a candidate ([`crate::trust::Trust::check`]: made for this unit, signed by a trusted
+/// key), made before a slot is chosen: a slot that fails it is passed over like a corrupt one.
+/// A flash read error counts as "no slot".
+pub fn choose<'a, F: ReadNorFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    region: &'a [u8],
+    accept: impl Fn(&[u8]) -> Result<Signer, Reason>,
+) -> Choice<'a> {
+    let refused = Cell::new(None);
+    // The signer of what was accepted last, and of each slot (by its payload's offset).
+    let signer = Cell::new(None);
+    let signers = [Cell::new(None), Cell::new(None)];
+    let check = |bytes: &[u8]| match accept(bytes) {
+        Ok(s) => {
+            signer.set(Some(s));
+            true
+        }
+        Err(why) => {
+            refused.set(Some(why));
+            false
+        }
+    };
+    let validate = |_: &mut F, off: u32, len: u32| {
+        let (at, n) = (off as usize, len as usize);
+        signer.set(None);
+        let ok = at
+            .checked_add(n)
+            .and_then(|end| region.get(at..end))
+            .is_some_and(|b| Image::parse(b).is_ok() && check(b));
+        let slot = usize::from(off != layout.a.saturating_add(tcomp_core::slots::PAYLOAD_AT));
+        if let Some(c) = signers.get(slot) {
+            c.set(signer.get());
+        }
+        ok
+    };
+    if let Ok(Some(active)) = select(flash, layout, validate) {
         let at = active.payload(layout) as usize;
         let image = at
             .checked_add(active.header.length as usize)
             .and_then(|end| region.get(at..end))
             .unwrap_or(&[]);
+        let signer = signers
+            .get(usize::from(active.slot.index()))
+            .and_then(Cell::get);
         return Choice {
             image,
             active: Some(active),
             source: Source::Slot(active.slot, active.header.generation),
+            signer,
+            refused: refused.get(),
         };
     }
     let a = layout.a as usize;
     let slot_a = region
         .get(a..a.saturating_add(layout.size as usize))
         .unwrap_or(&[]);
-    if Image::parse(slot_a).is_ok() {
+    signer.set(None);
+    if Image::parse(slot_a).is_ok() && check(slot_a) {
         let header = Header {
             generation: 0,
             length: layout.size,
@@ -91,12 +140,16 @@ pub fn choose<'a, F: ReadNorFlash>(flash: &mut F, layout: &Layout, region: &'a [
                 header,
             }),
             source: Source::Probe,
+            signer: signer.get(),
+            refused: refused.get(),
         };
     }
     Choice {
         image: &[],
         active: None,
         source: Source::None,
+        signer: None,
+        refused: refused.get(),
     }
 }
 
@@ -127,8 +180,12 @@ impl ReadNorFlash for Mapped<'_> {
 }
 
 /// [`choose`] over memory-mapped flash alone.
-pub fn choose_mapped<'a>(layout: &Layout, region: &'a [u8]) -> Choice<'a> {
-    choose(&mut Mapped(region), layout, region)
+pub fn choose_mapped<'a>(
+    layout: &Layout,
+    region: &'a [u8],
+    accept: impl Fn(&[u8]) -> Result<Signer, Reason>,
+) -> Choice<'a> {
+    choose(&mut Mapped(region), layout, region, accept)
 }
 
 /// A part's flash seen as its `MODELS` region: offsets from the region's start (`base` in the
@@ -225,6 +282,11 @@ mod tests {
 
     type Flash = SimNor<{ 64 * 1024 }, { 32 * 1024 }>;
 
+    /// Accepts any readable image (the trust checks have their own tests, `trust_tests.rs`).
+    fn any(_: &[u8]) -> Result<Signer, tcomp_core::update::Reason> {
+        Ok(Signer::Unsigned)
+    }
+
     /// [`validates`] as the update receiver's check before the commit.
     fn check(bytes: &[u8], off: u32, len: u32) -> Result<(), tcomp_core::update::Reason> {
         validates(bytes, off, len)
@@ -243,7 +305,7 @@ mod tests {
     /// The update task over the flash model, driven by the core's sender.
     fn update(flash: &mut Flash, new: &[u8]) -> Status {
         let region = flash.bytes().to_vec();
-        let choice = choose(&mut Mapped(&region), &QEMU_LAYOUT, &region);
+        let choice = choose(&mut Mapped(&region), &QEMU_LAYOUT, &region, any);
         let mut task = UpdateTask::new(QEMU_LAYOUT, choice.active);
         let mut tx = Sender::new(new, 1);
         let mut host = Decoder::new();
@@ -267,7 +329,7 @@ mod tests {
     #[test]
     fn erased_flash_runs_no_models() {
         let flash = Flash::new();
-        let c = choose_mapped(&QEMU_LAYOUT, flash.bytes());
+        let c = choose_mapped(&QEMU_LAYOUT, flash.bytes(), any);
         assert_eq!((c.source, c.active, c.image.len()), (Source::None, None, 0));
     }
 
@@ -279,7 +341,7 @@ mod tests {
         let mut padded = old.clone();
         padded.resize(old.len().next_multiple_of(4), 0);
         flash.write(0, &padded).unwrap();
-        let c = choose_mapped(&QEMU_LAYOUT, flash.bytes());
+        let c = choose_mapped(&QEMU_LAYOUT, flash.bytes(), any);
         assert_eq!(c.source, Source::Probe);
         assert_eq!(&c.image[..old.len()], &old[..]);
         assert_eq!(
@@ -289,7 +351,7 @@ mod tests {
                 generation: 1
             }
         );
-        let c = choose_mapped(&QEMU_LAYOUT, flash.bytes());
+        let c = choose_mapped(&QEMU_LAYOUT, flash.bytes(), any);
         assert_eq!(c.source, Source::Slot(SlotId::B, 1));
         assert_eq!(c.image, &new[..]);
         // The probe's image is untouched; the next update writes slot A over it.
@@ -302,7 +364,10 @@ mod tests {
                 generation: 2
             }
         ));
-        assert_eq!(choose_mapped(&QEMU_LAYOUT, flash.bytes()).image, &third[..]);
+        assert_eq!(
+            choose_mapped(&QEMU_LAYOUT, flash.bytes(), any).image,
+            &third[..]
+        );
     }
 
     #[test]
@@ -314,7 +379,7 @@ mod tests {
         use embedded_storage::nor_flash::NorFlash;
         flash.write(0, &old).unwrap();
         assert_eq!(
-            choose_mapped(&QEMU_LAYOUT, flash.bytes()).source,
+            choose_mapped(&QEMU_LAYOUT, flash.bytes(), any).source,
             Source::None
         );
     }
@@ -361,7 +426,7 @@ mod tests {
         flash.erase(32 * 1024, 64 * 1024).unwrap();
         flash.write(32 * 1024, &[0u8; 64]).unwrap();
         let region = flash.bytes().to_vec();
-        let active = choose(&mut Mapped(&region), &QEMU_LAYOUT, &region).active;
+        let active = choose(&mut Mapped(&region), &QEMU_LAYOUT, &region, any).active;
         let mut counting = Counting {
             inner: &mut flash,
             erases: 0,
@@ -411,7 +476,7 @@ mod tests {
         );
         assert_eq!(erases, 0, "the update erased while the loop would run");
         let region = flash.bytes().to_vec();
-        let chosen = choose(&mut Mapped(&region), &QEMU_LAYOUT, &region);
+        let chosen = choose(&mut Mapped(&region), &QEMU_LAYOUT, &region, any);
         assert_eq!(chosen.image, &new[..]);
     }
 }

@@ -41,15 +41,38 @@ fn models_region() -> &'static [u8] {
     unsafe { core::slice::from_raw_parts(start, len) }
 }
 
-/// The image to run: the newest committed slot that validates, else a bare image a probe wrote
-/// at slot A, else none (`tcomp_firmware::slots`).
+/// The image to run: the newest committed slot that validates and passes the unit's trust check
+/// (made for this unit, signed by a key of [`otp_keys`]), else a bare image a probe wrote at slot
+/// A that passes it, else none (`tcomp_firmware::slots`). Runs before the watchdog starts: each
+/// candidate's signature is verified here.
 fn models_choice() -> tcomp_firmware::slots::Choice<'static> {
+    let trust = trust();
     let choice = tcomp_firmware::slots::choose_mapped(
         &tcomp_firmware::slots::STM32F4_LAYOUT,
         models_region(),
+        |b| trust.check(b),
     );
-    defmt::info!("models: {}", choice.source);
+    defmt::info!("models: {} signed by {}", choice.source, choice.signer);
     choice
+}
+
+/// OTP blocks 1–4 (`0x1FFF_7820`, 128 bytes): the Ed25519 public keys this unit trusts, one per
+/// 32-byte block, programmed at the factory (see README.md, "Signed images"); an unprogrammed
+/// block (all 0xFF) or a revoked one (all 0x00) holds no key.
+const OTP_KEYS: usize = 0x1FFF_7820;
+/// Bytes of the key store: four keys, for rotation.
+const OTP_KEYS_LEN: usize = 4 * 32;
+
+/// The key store in OTP.
+fn otp_keys() -> &'static [u8] {
+    // SAFETY: the OTP area is always mapped and readable on the STM32F405/407, and nothing in
+    // the firmware programs it; 128 bytes from block 1 lie inside its 512 bytes.
+    unsafe { core::slice::from_raw_parts(OTP_KEYS as *const u8, OTP_KEYS_LEN) }
+}
+
+/// The unit's trust: its serial and its keys (`tcomp_firmware::trust`).
+fn trust() -> tcomp_firmware::trust::Trust<'static> {
+    tcomp_firmware::trust::Trust::new(unit_serial(), otp_keys())
 }
 
 /// Offset of the `MODELS` region (sector 10) from the start of the part's flash, as the HAL's
@@ -97,7 +120,6 @@ mod app {
     use tcomp_core::update::Reason;
     use tcomp_firmware::app::{App, MAX_CHANNELS, Record, status};
     use tcomp_firmware::boot::REPORT_PERIODS;
-    use tcomp_firmware::image::acceptable;
     use tcomp_firmware::slots::{STM32F4_LAYOUT, Windowed, erase_inactive};
     use tcomp_firmware::update::{MAX_REPLY, UpdateTask, serial_text};
 
@@ -181,7 +203,7 @@ mod app {
             crate::fault::ResetCause::WindowWatchdog
                 | crate::fault::ResetCause::IndependentWatchdog
         );
-        let report = tcomp_firmware::boot::report(image, unit, CONFIG, &loaded, watchdog);
+        let report = tcomp_firmware::boot::report(&choice, unit, CONFIG, &loaded, watchdog);
         defmt::info!(
             "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
             report.unit_serial,
@@ -274,7 +296,7 @@ mod app {
         if l.sequence.is_multiple_of(REPORT_PERIODS) {
             // At boot and every 10 s, before the data frame it announces (never on the loop's
             // timed path: the sample is done).
-            l.report.sequence = *l.sequence;
+            tcomp_firmware::boot::stamp(l.report, *l.sequence);
             let mut buf = [0u8; MAX_FRAME_LEN];
             if let Some(len) = l.report.encode(&mut buf) {
                 cx.shared
@@ -331,12 +353,12 @@ mod app {
                 base: crate::MODELS_OFFSET,
                 mapped: crate::models_region(),
             };
-            let unit = *l.unit;
+            let trust = tcomp_firmware::trust::Trust::new(*l.unit, crate::otp_keys());
             let validate = |w: &mut Windowed<'_, _>, off: u32, len: u32| {
                 let at = off as usize;
                 w.mapped
                     .get(at..at.saturating_add(len as usize))
-                    .map_or(Err(Reason::Flash), |b| acceptable(b, unit))
+                    .map_or(Err(Reason::Flash), |b| trust.check_payload(b).map(|_| ()))
             };
             if let Some(n) = l
                 .update

@@ -49,8 +49,9 @@ use tcomp_firmware::replay::{
     Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, UNIT_SERIAL,
     Vector,
 };
-use tcomp_firmware::slots::{QEMU_LAYOUT, Source, choose};
+use tcomp_firmware::slots::{Choice, QEMU_LAYOUT, Source, choose};
 use tcomp_firmware::timing::TimeCheck;
+use tcomp_firmware::trust::Trust;
 use tcomp_firmware::update::serial_text;
 use tcomp_firmware::{
     HASH_START, InstructionCounter, RamFlash, TIMER0_IRQ, TimeBase, Timer, UART0_RX_IRQ, Uart,
@@ -101,6 +102,8 @@ unsafe extern "C" {
     static __models_end: u8;
     static __replay_start: u8;
     static __replay_end: u8;
+    static __keys_start: u8;
+    static __keys_end: u8;
     static _stack_start: u8;
 }
 
@@ -182,18 +185,27 @@ fn load(
     )
 }
 
+/// The unit's trust: the replay board's serial and the keys of the `KEYS` region (QEMU has no
+/// OTP: the loader puts the key store there as a factory would program OTP blocks 1–4).
+fn trust() -> Trust<'static> {
+    Trust::new(
+        UNIT_SERIAL,
+        region(&raw const __keys_start, &raw const __keys_end),
+    )
+}
+
 /// Writes the boot report into [`REPORT`] and logs it. Not inlined: its temporaries are not on
 /// the stack while the models are decoded.
 #[inline(never)]
 fn write_report(
     report: &mut BootReport,
-    image: &'static [u8],
+    choice: &Choice<'static>,
     config: &'static [ChannelConfig],
     loaded: &[Result<(), LoadError>; MAX_CHANNELS],
     watchdog: bool,
     next: u32,
 ) {
-    *report = tcomp_firmware::boot::report(image, UNIT_SERIAL, config, loaded, watchdog);
+    *report = tcomp_firmware::boot::report(choice, UNIT_SERIAL, config, loaded, watchdog);
     report.sequence = next;
     defmt::info!(
         "boot report: unit {=u64:#x}, image v{=u16} for unit {=u64:#x} (state {=u8}), board {=u64:#018x}, crc {=u32:#010x}",
@@ -316,7 +328,7 @@ fn main() -> ! {
     // SAFETY: MODELS is mapped RAM under QEMU; the update writes only the inactive slot, and the
     // loop's models borrow only the active one (`choice.image`).
     let mut flash = unsafe { RamFlash::new(models.as_ptr(), models.len()) };
-    let choice = choose(&mut flash, &QEMU_LAYOUT, models);
+    let choice = choose(&mut flash, &QEMU_LAYOUT, models, |b| trust().check(b));
     let (image, source) = (choice.image, choice.source);
     if after_update {
         update_boot(app, image, source);
@@ -352,7 +364,7 @@ fn main() -> ! {
     // Two calls, not one function: only `load`'s small frame lies under the decoder's.
     let loaded = load(app, image, &vector);
     let report = boot_report();
-    write_report(report, image, config, &loaded, boot_flags != 0, run.next);
+    write_report(report, &choice, config, &loaded, boot_flags != 0, run.next);
 
     let port = start_update(cp.NVIC);
     start_loop(app, run, vector, config, cp.SYST, boot_flags, report);

@@ -31,7 +31,7 @@ pub(super) struct Loop {
 impl Loop {
     /// Sends the boot report, stamped with the next data frame's sequence number.
     pub(super) fn send_report(&mut self, sequence: u32) {
-        self.report.sequence = sequence;
+        tcomp_firmware::boot::stamp(self.report, sequence);
         send_report(&self.uart, self.report);
     }
 }

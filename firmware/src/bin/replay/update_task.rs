@@ -4,7 +4,6 @@
 use super::*;
 use tcomp_core::slots::Active;
 use tcomp_core::update::Reason;
-use tcomp_firmware::image::acceptable;
 use tcomp_firmware::update::{MAX_REPLY, UpdateTask};
 
 /// What the receive interrupt owns.
@@ -53,9 +52,12 @@ pub(super) fn on_receive() {
     while let Some(byte) = port.read() {
         // The new image must read and be made for this unit: an image for another unit is
         // refused before the commit, so the unit keeps its models.
+        // The new image must pass the unit's trust check (made for this unit, signed by a key
+        // of the KEYS region) before the commit word is written: a refused image is never
+        // committed, and the unit keeps its models.
         let validate = |f: &mut RamFlash, off, len| {
             f.bytes(off, len)
-                .map_or(Err(Reason::Flash), |b| acceptable(b, UNIT_SERIAL))
+                .map_or(Err(Reason::Flash), |b| trust().check_payload(b).map(|_| ()))
         };
         if let Some(n) = u
             .task
