@@ -15,7 +15,7 @@
 //! 12      2     thermometers T
 //! 14      2     counters P
 //! 16      2     channels K
-//! 18      2     reserved (0)
+//! 18      2     flags: bit 0 [`HOLD_FOR_UPDATE`]
 //! 20      4     timestamp latched with the counter registers before the first sample (u32)
 //! 24      4·P   counter registers before the first sample (u32)
 //! …       S × (8 + 4T + 4P)   per sample: fault mask u32 (bit i: thermometer i bus error,
@@ -49,6 +49,10 @@ pub const MAGIC: [u8; 4] = *b"TCRV";
 pub const VERSION: u16 = 2;
 /// Bytes before the initial timestamp and counter values.
 pub const HEADER_LEN: usize = 20;
+/// Header flag: a model update is sent while this vector plays. After the last sample the board
+/// keeps its loop running (on the last record's inputs, frames not compared) until the update has
+/// committed, so the run never ends in the middle of an update however slowly the host sends it.
+pub const HOLD_FOR_UPDATE: u16 = 1;
 /// Fault-mask bit: the sample task of this sample takes longer than a period (the next sample is
 /// late and flagged [`crate::app::status::OVERRUN`]).
 pub const STALL: u32 = 1 << 28;
@@ -127,6 +131,8 @@ pub struct Vector<'a> {
     pub counters: usize,
     /// Channels per expected record.
     pub channels: usize,
+    /// Header flags ([`HOLD_FOR_UPDATE`]).
+    pub flags: u16,
 }
 
 impl<'a> Vector<'a> {
@@ -142,6 +148,7 @@ impl<'a> Vector<'a> {
             thermometers: usize::from(u16_at(bytes, 12)),
             counters: usize::from(u16_at(bytes, 14)),
             channels: usize::from(u16_at(bytes, 16)),
+            flags: u16_at(bytes, 18),
         };
         if v.thermometers > MAX_THERMOMETERS || v.counters > MAX_COUNTERS {
             return Err(VectorError::TooWide);
@@ -205,9 +212,10 @@ impl<'a> Vector<'a> {
         let mut b = self.board();
         if let Some(prev) = n.checked_sub(1) {
             self.load(prev, &mut b);
-            for c in b.counters.iter_mut() {
+            let latched = b.block.timestamp;
+            for c in b.block.counters.iter_mut() {
                 c.last = c.register;
-                c.last_ts = b.timestamp;
+                c.last_ts = latched;
                 c.fault = false;
                 c.flagged = false;
             }
@@ -219,17 +227,20 @@ impl<'a> Vector<'a> {
     pub fn board(&self) -> Board {
         let mut b = Board {
             thermometers: [ReplayThermometer::default(); MAX_THERMOMETERS],
-            counters: [ReplayCounter::default(); MAX_COUNTERS],
             n_thermometers: self.thermometers,
-            n_counters: self.counters,
-            timestamp: u64::from(u32_at(self.bytes, HEADER_LEN)),
+            block: ReplayBlock {
+                counters: [ReplayCounter::default(); MAX_COUNTERS],
+                n: self.counters,
+                timestamp: u64::from(u32_at(self.bytes, HEADER_LEN)),
+            },
         };
-        for (j, c) in b.counters.iter_mut().take(self.counters).enumerate() {
+        let latched = b.block.timestamp;
+        for (j, c) in b.block.counters.iter_mut().take(self.counters).enumerate() {
             let r = u32_at(self.bytes, HEADER_LEN + 4 + 4 * j);
             *c = ReplayCounter {
                 register: r,
                 last: r,
-                last_ts: b.timestamp,
+                last_ts: latched,
                 fault: false,
                 flagged: false,
             };
@@ -241,7 +252,7 @@ impl<'a> Vector<'a> {
     pub fn load(&self, n: usize, board: &mut Board) {
         let at = self.inputs_at() + n * self.record_len();
         let faults = u32_at(self.bytes, at);
-        board.timestamp = self.timestamp(n);
+        board.block.timestamp = self.timestamp(n);
         let at = at + 4;
         for (i, t) in board
             .thermometers
@@ -255,7 +266,13 @@ impl<'a> Vector<'a> {
             };
         }
         let counters_at = at + 4 + 4 * self.thermometers;
-        for (j, c) in board.counters.iter_mut().take(self.counters).enumerate() {
+        for (j, c) in board
+            .block
+            .counters
+            .iter_mut()
+            .take(self.counters)
+            .enumerate()
+        {
             c.register = u32_at(self.bytes, counters_at + 4 * j);
             c.fault = faults & (1 << (16 + j)) != 0;
             c.flagged = faults & (1 << (COUNTER_FLAG_SHIFT as usize + j)) != 0;
@@ -320,17 +337,16 @@ impl PulseCounter for ReplayCounter {
 #[derive(Clone, Debug)]
 pub struct Board {
     thermometers: [ReplayThermometer; MAX_THERMOMETERS],
-    counters: [ReplayCounter; MAX_COUNTERS],
     n_thermometers: usize,
-    n_counters: usize,
-    /// The timestamp latched at the current sample's timer edge.
-    timestamp: u64,
+    block: ReplayBlock,
 }
 
 /// The replayed counters as one latched snapshot (what the counter block gives a loop).
-#[derive(Debug)]
-pub struct ReplayBlock<'a> {
-    counters: &'a mut [ReplayCounter],
+#[derive(Clone, Debug)]
+pub struct ReplayBlock {
+    counters: [ReplayCounter; MAX_COUNTERS],
+    n: usize,
+    /// The timestamp latched at the current sample's timer edge.
     timestamp: u64,
 }
 
@@ -339,11 +355,12 @@ pub struct ReplayBlock<'a> {
 /// separate front end would). The interval returned is the one since the counters consumed now
 /// were last consumed, if that was at one instant for all of them (as [`tcomp_hal::pulse_counter`]
 /// decides for the block); otherwise `None`, and the loop uses the nominal periods.
-impl CounterSnapshot for ReplayBlock<'_> {
+impl CounterSnapshot for ReplayBlock {
     fn read_snapshot(&mut self, out: &mut [Interval]) -> Option<f32> {
         let mut since: Option<u64> = None;
         let mut same = true;
-        for (c, o) in self.counters.iter_mut().zip(out.iter_mut()) {
+        let counters = self.counters.get_mut(..self.n).unwrap_or(&mut []);
+        for (c, o) in counters.iter_mut().zip(out.iter_mut()) {
             let last = c.last_ts;
             *o = Interval::from_result(c.read_delta());
             if !matches!(o, Interval::Unread(_)) {
@@ -364,21 +381,21 @@ impl Board {
             .thermometers
             .get_mut(..self.n_thermometers)
             .unwrap_or(&mut []);
-        let c = self.counters.get_mut(..self.n_counters).unwrap_or(&mut []);
+        let c = self
+            .block
+            .counters
+            .get_mut(..self.block.n)
+            .unwrap_or(&mut []);
         (t, c)
     }
 
     /// The thermometers, and the counters as one latched snapshot, as the loop reads them.
-    pub fn snapshot(&mut self) -> (&mut [ReplayThermometer], ReplayBlock<'_>) {
-        let timestamp = self.timestamp;
-        let (t, counters) = self.sensors();
-        (
-            t,
-            ReplayBlock {
-                counters,
-                timestamp,
-            },
-        )
+    pub fn snapshot(&mut self) -> (&mut [ReplayThermometer], &mut ReplayBlock) {
+        let t = self
+            .thermometers
+            .get_mut(..self.n_thermometers)
+            .unwrap_or(&mut []);
+        (t, &mut self.block)
     }
 }
 

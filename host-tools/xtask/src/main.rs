@@ -12,12 +12,15 @@
 //!   `tcomp flash` (`update.rs`).
 
 mod board;
+mod defmt;
 mod elf;
+mod proc;
 mod qemu;
 mod update;
 
 use anyhow::{Context, Result, bail};
-use std::process::{Command, Stdio};
+use std::process::Command;
+use std::time::{Duration, Instant};
 use tcomp_tests::replay::field;
 
 const TARGET: &str = "thumbv7em-none-eabihf";
@@ -36,71 +39,123 @@ fn main() -> Result<()> {
     }
 }
 
+/// The longest a cargo command of the xtask may take: the workspace's test build from nothing
+/// takes about 10 min on the 2-core machine while other builds run; CI's own limit is 90 min.
+const CARGO_LIMIT: Duration = proc::minutes(40);
+/// The host test set: the workspace less the firmware crates (their library's tests run apart,
+/// the boards are target-only).
+pub const HOST_TESTS: [&str; 5] = [
+    "--workspace",
+    "--exclude",
+    "tcomp-firmware",
+    "--exclude",
+    "tcomp-board-stm32f4",
+];
+/// The QEMU smoke run: about 1 s.
+const SMOKE_LIMIT: Duration = proc::minutes(2);
+
 fn cargo(args: &[&str]) -> Result<()> {
     eprintln!("$ cargo {}", args.join(" "));
-    let status = Command::new(env!("CARGO"))
-        .args(args)
-        .status()
-        .context("running cargo")?;
-    if !status.success() {
-        bail!("`cargo {}` failed ({status})", args.join(" "));
+    proc::run(
+        Command::new(env!("CARGO")).args(args),
+        &format!("`cargo {}`", args.join(" ")),
+        CARGO_LIMIT,
+    )
+}
+
+/// The wall time of each step of `cargo xtask ci`, printed as it goes and summed up at the end
+/// (`CI-TIMING`), so a slow CI run says where its time went.
+struct Steps(Vec<(&'static str, Duration)>);
+
+impl Steps {
+    fn run(&mut self, name: &'static str, step: impl FnOnce() -> Result<()>) -> Result<()> {
+        let t = Instant::now();
+        let r = step();
+        let took = t.elapsed();
+        eprintln!("CI-STEP {name}: {:.0} s", took.as_secs_f64());
+        self.0.push((name, took));
+        r.with_context(|| format!("step `{name}`"))
     }
-    Ok(())
+}
+
+impl Drop for Steps {
+    fn drop(&mut self) {
+        let total: f64 = self.0.iter().map(|(_, d)| d.as_secs_f64()).sum();
+        let steps: Vec<String> = self
+            .0
+            .iter()
+            .map(|(n, d)| format!("{n}={:.0}", d.as_secs_f64()))
+            .collect();
+        println!("CI-TIMING total={total:.0} {}", steps.join(" "));
+    }
 }
 
 fn ci() -> Result<()> {
-    cargo(&["fmt", "--all", "--", "--check"])?;
-    cargo(&[
-        "clippy",
-        "--workspace",
-        "--exclude",
-        "tcomp-firmware",
-        "--exclude",
-        "tcomp-board-stm32f4",
-        "--all-targets",
-        "--",
-        "-D",
-        "warnings",
-    ])?;
-    cargo(&[
-        "clippy",
-        "-p",
-        "tcomp-core",
-        "-p",
-        "tcomp-hal",
-        "-p",
-        "tcomp-firmware",
-        "--target",
-        TARGET,
-        "--",
-        "-D",
-        "warnings",
-    ])?;
+    let mut steps = Steps(Vec::new());
+    steps.run("fmt", || cargo(&["fmt", "--all", "--", "--check"]))?;
+    steps.run("clippy_host", || {
+        cargo(&[
+            "clippy",
+            "--workspace",
+            "--exclude",
+            "tcomp-firmware",
+            "--exclude",
+            "tcomp-board-stm32f4",
+            "--all-targets",
+            "--",
+            "-D",
+            "warnings",
+        ])
+    })?;
+    steps.run("clippy_target", || {
+        cargo(&[
+            "clippy",
+            "-p",
+            "tcomp-core",
+            "-p",
+            "tcomp-hal",
+            "-p",
+            "tcomp-firmware",
+            "--target",
+            TARGET,
+            "--",
+            "-D",
+            "warnings",
+        ])
+    })?;
     // The firmware's library (the loop) has host tests; its binaries are target-only.
     let firmware_lib = ["-p", "tcomp-firmware", "--lib", "--tests"];
-    cargo(&[&["clippy"][..], &firmware_lib, &["--", "-D", "warnings"]].concat())?;
-    cargo(&[
-        "test",
-        "--workspace",
-        "--exclude",
-        "tcomp-firmware",
-        "--exclude",
-        "tcomp-board-stm32f4",
-    ])?;
-    cargo(&["test", "-p", "tcomp-firmware", "--lib"])?;
-    power_cut()?;
-    cargo(&["build", "-p", "tcomp-core", "--target", TARGET, "--release"])?;
-    cargo(&["build", "-p", "tcomp-hal", "--target", TARGET, "--release"])?;
-    board::board()?;
-    smoke()?;
-    qemu::qemu()
+    steps.run("clippy_firmware_lib", || {
+        cargo(&[&["clippy"][..], &firmware_lib, &["--", "-D", "warnings"]].concat())
+    })?;
+    steps.run("test", || cargo(&[&["test"][..], &HOST_TESTS].concat()))?;
+    steps.run("test_firmware_lib", || {
+        cargo(&["test", "-p", "tcomp-firmware", "--lib"])
+    })?;
+    steps.run("power_cut", power_cut)?;
+    steps.run("no_std_core_hal", || {
+        cargo(&[
+            "build",
+            "-p",
+            "tcomp-core",
+            "-p",
+            "tcomp-hal",
+            "--target",
+            TARGET,
+            "--release",
+        ])
+    })?;
+    steps.run("board", board::board)?;
+    steps.run("smoke", smoke)?;
+    steps.run("qemu", qemu::qemu)
 }
 
-/// Runs the smoke binary under QEMU (the runner in `.cargo/config.toml`), echoes its output, and
-/// checks its verdict, QEMU's exit code and the instruction budget.
+/// Runs the smoke binary under QEMU (with the runner's arguments of `.cargo/config.toml`, bounded
+/// by [`SMOKE_LIMIT`]), echoes its output, and checks its verdict, QEMU's exit code and the
+/// instruction budget.
 fn smoke() -> Result<()> {
-    let args = [
-        "run",
+    cargo(&[
+        "build",
         "-p",
         "tcomp-firmware",
         "--target",
@@ -108,13 +163,25 @@ fn smoke() -> Result<()> {
         "--release",
         "--bin",
         "smoke",
-    ];
-    eprintln!("$ cargo {}", args.join(" "));
-    let out = Command::new(env!("CARGO"))
-        .args(args)
-        .stderr(Stdio::inherit())
-        .output()
-        .context("running QEMU (is qemu-system-arm installed?)")?;
+    ])?;
+    let elf = qemu::target_dir().join(TARGET).join("release/smoke");
+    let mut qemu = Command::new("qemu-system-arm");
+    qemu.args([
+        "-cpu",
+        "cortex-m4",
+        "-machine",
+        "mps2-an386",
+        "-nographic",
+        "-monitor",
+        "none",
+        "-semihosting-config",
+        "enable=on,target=native",
+        "-icount",
+        "shift=0",
+        "-kernel",
+    ])
+    .arg(&elf);
+    let out = proc::output(&mut qemu, "the QEMU smoke run", SMOKE_LIMIT)?;
     let text = String::from_utf8_lossy(&out.stdout);
     print!("{text}");
     if !out.status.success() || !text.contains("SMOKE OK") {
@@ -143,11 +210,11 @@ fn power_cut() -> Result<()> {
         "--nocapture",
     ];
     eprintln!("$ cargo {}", args.join(" "));
-    let out = Command::new(env!("CARGO"))
-        .args(args)
-        .stderr(Stdio::inherit())
-        .output()
-        .context("running the power-loss test")?;
+    let out = proc::output(
+        Command::new(env!("CARGO")).args(args),
+        "the power-loss test",
+        CARGO_LIMIT,
+    )?;
     let text = String::from_utf8_lossy(&out.stdout);
     let line = text
         .lines()

@@ -2,10 +2,12 @@
 //! same loop under QEMU fed through QEMU's loader (no rebuild for a new image or vector), bit-exact
 //! comparison, fault checks and budgets, ending with one `QEMU-SUMMARY` line.
 
+use crate::proc;
 use crate::{TARGET, cargo};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+use std::time::Duration;
 use tcomp_firmware::app::{IFOG1, IMU6};
 use tcomp_firmware::image::Image;
 use tcomp_firmware::replay::{CONFIG_IFOG1, CONFIG_IMU6, UNIT_SERIAL};
@@ -35,19 +37,27 @@ const FLASH_BUDGET: u64 = crate::board::FLASH_BUDGET;
 /// accelerator for straight-line code).
 const CORE_HZ: f64 = 168e6;
 const SAMPLE_HZ: f64 = 200.0;
+/// One `tcomp` command of the run (a simulation, a fit of 32 centers, an image): a second or two.
+const TCOMP_LIMIT: Duration = proc::minutes(3);
+/// One QEMU replay: 10,000 samples (50 s of guest time) take about 6 s on the 2-core machine.
+pub const QEMU_LIMIT: Duration = proc::minutes(5);
+
+/// The workspace's target directory (`CARGO_TARGET_DIR` or `target/`).
+pub fn target_dir() -> PathBuf {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    std::env::var_os("CARGO_TARGET_DIR").map_or(root.join("target"), PathBuf::from)
+}
 
 fn tcomp(dir: &Path, args: &[&str]) -> Result<()> {
     let exe = dir.join("../debug/tcomp");
-    let status = Command::new(&exe)
-        .args(args)
-        .current_dir(dir)
-        .stdout(Stdio::null())
-        .status()
-        .with_context(|| format!("running {}", exe.display()))?;
-    if !status.success() {
-        bail!("`tcomp {}` failed", args.join(" "));
-    }
-    Ok(())
+    proc::run(
+        Command::new(&exe)
+            .args(args)
+            .current_dir(dir)
+            .stdout(Stdio::null()),
+        &format!("`tcomp {}`", args.join(" ")),
+        TCOMP_LIMIT,
+    )
 }
 
 /// Models: the seed presets at 1 Hz, 32 centers × 4 features each.
@@ -159,38 +169,25 @@ pub fn qemu_command(elf: &Path, image: &Path, vector: &Path, serial: &str) -> Co
     qemu
 }
 
-/// Runs the replay binary under QEMU with `image` and `vector` loaded and UART 0 captured into
-/// `uart`, decodes its defmt output (boot messages and the summary, over semihosting) with
-/// `defmt-print`, and returns the decoded text; fails on QEMU's exit code. QEMU restarts the guest
-/// on a watchdog reset (no `-no-reboot`): the loaders and the ELF are loaded again, the rest of RAM
+/// Runs the replay binary under QEMU (bounded by [`QEMU_LIMIT`]) with `image` and `vector` loaded
+/// and UART 0 captured into `uart`, decodes its defmt output (boot messages and the summary, over
+/// semihosting) and returns the decoded text; fails on QEMU's exit code. QEMU restarts the guest on
+/// a watchdog reset (no `-no-reboot`): the loaders and the ELF are loaded again, the rest of RAM
 /// and the UART capture go on.
 fn run_qemu(elf: &Path, image: &Path, vector: &Path, uart: &Path) -> Result<String> {
-    let mut qemu = qemu_command(elf, image, vector, &format!("file:{}", uart.display()))
-        .stdout(Stdio::piped())
-        .spawn()
-        .context("starting qemu-system-arm")?;
-    let frames = qemu.stdout.take().context("qemu stdout")?;
-    let decoder = Command::new("defmt-print")
-        .arg("-e")
-        .arg(elf)
-        .stdin(frames)
-        .stdout(Stdio::piped())
-        .spawn()
-        .context("starting defmt-print (cargo install defmt-print --locked)")?;
-    let qemu_status = qemu.wait()?;
-    let decoded = decoder.wait_with_output()?;
-    let text = String::from_utf8_lossy(&decoded.stdout).into_owned();
+    let mut cmd = qemu_command(elf, image, vector, &format!("file:{}", uart.display()));
+    let out = proc::output(&mut cmd, "the QEMU replay", QEMU_LIMIT)?;
+    let text = crate::defmt::decode(elf, &out.stdout)?;
     print!("{text}");
-    if !qemu_status.success() {
-        bail!("the QEMU replay failed ({qemu_status})");
+    if !out.status.success() {
+        bail!("the QEMU replay failed ({})", out.status);
     }
     Ok(text)
 }
 
 pub fn qemu() -> Result<()> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let target_dir =
-        std::env::var_os("CARGO_TARGET_DIR").map_or(root.join("target"), PathBuf::from);
+    let target_dir = target_dir();
     let work = target_dir.join("qemu-replay");
     std::fs::create_dir_all(&work)?;
     cargo(&[
@@ -204,8 +201,11 @@ pub fn qemu() -> Result<()> {
         "replay",
     ])?;
     let elf = target_dir.join(TARGET).join("release/replay");
-    // The host CLI makes the models and vectors; build it so `cargo xtask qemu` stands alone.
-    cargo(&["build", "-p", "tcomp"])?;
+    // The host CLI makes the models and vectors; build it so `cargo xtask qemu` stands alone. With
+    // the test step's own command, so in CI it is already built: `cargo build -p tcomp` resolves
+    // the dependencies' features for `tcomp` alone and rebuilt some forty crates a second time
+    // (serde, nalgebra, the trainer, …: minutes on a fresh 2-core machine).
+    cargo(&[&["test", "--no-run"][..], &crate::HOST_TESTS].concat())?;
     fit_models(&work)?;
     simulate_slices(&root, &work)?;
     // The images, made as a user makes them: the shipped board descriptions, the unit serial the
@@ -421,6 +421,7 @@ fn replay_runs(
 /// would boot the new image in the middle of the vector), the corrupt image as the initial one.
 fn update_run(work: &Path, elf: &Path, imu: &mut Inputs, corrupt: &[u8]) -> Result<()> {
     imu.board_faults.iter_mut().for_each(|f| *f = 0);
+    imu.flags = tcomp_firmware::replay::HOLD_FOR_UPDATE;
     let d = build(CONFIG_IMU6, &IMU6, imu, corrupt)?;
     let vector_d = work.join("vector-imu6-update.bin");
     std::fs::write(&vector_d, &d.bytes)?;

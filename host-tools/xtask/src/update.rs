@@ -9,10 +9,23 @@
 //! survives in RAM, so the next boot must choose slot B, generation 1, and load all six models.
 
 use crate::field;
+use crate::proc::{self, Bounded};
 use anyhow::{Context, Result, bail};
 use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Command, Stdio};
+use std::process::{ChildStdout, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// How long `tcomp flash` waits for each reply before it repeats the request. Generous against the
+/// guest's clock: QEMU runs the guest several times faster than real time (`-icount` without
+/// sleeping), and the firmware keeps its loop running until the update has committed, so a longer
+/// wait only costs wall time when a request is really lost.
+const REPLY_TIMEOUT_MS: &str = "3000";
+/// The whole `tcomp flash`: about 1 s of wall time for a 6-channel image.
+const FLASH_LIMIT: Duration = proc::minutes(4);
+/// QEMU naming its pty: at once.
+const PTY_LIMIT: Duration = Duration::from_secs(30);
 
 /// Runs the update; `vector` is an IMU6 vector without injected board faults built for
 /// `initial` (its expected outputs and `hash`), `samples` the records it serves; `update` is the
@@ -26,43 +39,38 @@ pub fn run(
     hash: u32,
     samples: usize,
 ) -> Result<()> {
-    let (mut qemu, mut stdout, pty) = start_qemu(elf, initial, vector)?;
-    let mut decoder = Command::new("defmt-print")
-        .arg("-e")
-        .arg(elf)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .context("starting defmt-print")?;
-    let mut to_decoder = decoder.stdin.take().context("defmt-print stdin")?;
-    let pump = std::thread::spawn(move || std::io::copy(&mut stdout, &mut to_decoder));
-    let flash = Command::new(work.join("../debug/tcomp"))
-        .args([
-            "flash",
-            "--port",
-            &pty,
-            "--json",
-            "--timeout-ms",
-            "1000",
-            "--board",
-        ])
-        .arg(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../firmware/descriptions/imu6-rlg-qma.toml"
-        ))
-        .arg(update)
-        .output()
-        .context("running tcomp flash")?;
+    let (mut qemu, stdout, pty) = start_qemu(elf, initial, vector)?;
+    let log = proc::collect(stdout);
+    let flash = proc::output(
+        Command::new(work.join("../debug/tcomp"))
+            .args([
+                "flash",
+                "--port",
+                &pty,
+                "--json",
+                "--timeout-ms",
+                REPLY_TIMEOUT_MS,
+                "--board",
+            ])
+            .arg(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../firmware/descriptions/imu6-rlg-qma.toml"
+            ))
+            .arg(update),
+        "`tcomp flash` over QEMU's pty",
+        FLASH_LIMIT,
+    )?;
     let report = String::from_utf8_lossy(&flash.stdout).into_owned();
     print!("{report}");
-    eprint!("{}", String::from_utf8_lossy(&flash.stderr));
-    let qemu_status = qemu.wait()?;
-    pump.join().ok();
-    let text = String::from_utf8_lossy(&decoder.wait_with_output()?.stdout).into_owned();
-    print!("{text}");
+    // The firmware holds its loop until the update commits, then ends its run; if `tcomp flash`
+    // failed, QEMU is killed when `qemu` is dropped.
     if !flash.status.success() || !report.contains("\"result\": \"ok\"") {
-        bail!("tcomp flash over QEMU's pty failed");
+        bail!("tcomp flash over QEMU's pty failed ({})", flash.status);
     }
+    let qemu_status = qemu.wait()?;
+    let bytes = log.join().unwrap_or_default();
+    let text = crate::defmt::decode(elf, &bytes)?;
+    print!("{text}");
     if !qemu_status.success() {
         bail!("the QEMU update run failed ({qemu_status})");
     }
@@ -95,38 +103,39 @@ pub fn run(
     Ok(())
 }
 
-/// Starts the replay firmware under QEMU with its UART on a pty; returns QEMU, its standard output
-/// (read past the line that names the pty) and the pty's path.
+/// Starts the replay firmware under QEMU (bounded) with its UART on a pty; returns QEMU, its
+/// standard output (read past the line that names the pty) and the pty's path.
 fn start_qemu(
     elf: &Path,
     initial: &Path,
     vector: &Path,
-) -> Result<(
-    std::process::Child,
-    BufReader<std::process::ChildStdout>,
-    String,
-)> {
-    let mut qemu = crate::qemu::qemu_command(elf, initial, vector, "pty")
-        .stdout(Stdio::piped())
-        .spawn()
-        .context("starting qemu-system-arm")?;
+) -> Result<(Bounded, BufReader<ChildStdout>, String)> {
+    let mut cmd = crate::qemu::qemu_command(elf, initial, vector, "pty");
+    cmd.stdout(Stdio::piped());
+    let mut qemu = Bounded::spawn(&mut cmd, "the QEMU update run", crate::qemu::QEMU_LIMIT)?;
     // QEMU names the pty on its standard output, before the guest's semihosting (defmt) bytes,
-    // which then go on to defmt-print.
-    let mut stdout = BufReader::new(qemu.stdout.take().context("qemu stdout")?);
-    let mut line = String::new();
-    let pty = loop {
-        line.clear();
-        if stdout.read_line(&mut line)? == 0 {
-            bail!("QEMU named no pty for its serial port");
-        }
-        if let Some(rest) = line.split("char device redirected to ").nth(1) {
-            eprint!("{line}");
-            break rest
-                .split_whitespace()
-                .next()
-                .context("pty path")?
-                .to_string();
-        }
-    };
-    Ok((qemu, stdout, pty))
+    // which the caller decodes. Read on a thread, so a QEMU that never names it fails in time.
+    let stdout = BufReader::new(qemu.take_stdout().context("qemu stdout")?);
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let mut stdout = stdout;
+        let mut line = String::new();
+        let found = loop {
+            line.clear();
+            match stdout.read_line(&mut line) {
+                Ok(0) | Err(_) => break None,
+                Ok(_) => {}
+            }
+            if let Some(rest) = line.split("char device redirected to ").nth(1) {
+                eprint!("{line}");
+                break rest.split_whitespace().next().map(str::to_string);
+            }
+        };
+        let _ = tx.send(found.map(|pty| (pty, stdout)));
+    });
+    match rx.recv_timeout(PTY_LIMIT) {
+        Ok(Some((pty, stdout))) => Ok((qemu, stdout, pty)),
+        Ok(None) => bail!("QEMU named no pty for its serial port"),
+        Err(_) => bail!("QEMU named no pty within {} s: killed", PTY_LIMIT.as_secs()),
+    }
 }

@@ -92,6 +92,8 @@ pub struct Inputs {
     pub board_faults: Vec<u32>,
     /// The counter block's latch instants, ticks of 25 MHz (the one before the first sample is 0).
     pub timestamps: Vec<u32>,
+    /// The vector's header flags (`replay::HOLD_FOR_UPDATE`).
+    pub flags: u16,
 }
 
 impl Inputs {
@@ -106,6 +108,7 @@ impl Inputs {
             counter_flagged: vec![],
             board_faults: vec![0; samples],
             timestamps: (0..samples).map(latch_ticks).collect(),
+            flags: 0,
         }
     }
 
@@ -155,7 +158,7 @@ impl Inputs {
         b.extend_from_slice(&(self.temps.len() as u16).to_le_bytes());
         b.extend_from_slice(&(self.counters.len() as u16).to_le_bytes());
         b.extend_from_slice(&(channels as u16).to_le_bytes());
-        b.extend_from_slice(&0u16.to_le_bytes());
+        b.extend_from_slice(&self.flags.to_le_bytes());
         debug_assert_eq!(b.len(), HEADER_LEN);
         b.extend_from_slice(&0u32.to_le_bytes());
         for s in &self.counter_start {
@@ -253,9 +256,9 @@ pub fn build<const K: usize>(
             let injected = v.board_faults(n);
             v.load(n, &mut board);
             app.skip_periods(missed);
-            let (t, mut c) = board.snapshot();
+            let (t, c) = board.snapshot();
             let mut out = [Record::default(); K];
-            app.sample_snapshot(t, &mut c, &mut out);
+            app.sample_snapshot(t, c, &mut out);
             outputs.push(out);
             served.push(true);
             let mut flags = check.check(v.timestamp(n), u32::from(missed)) | boot_flags;

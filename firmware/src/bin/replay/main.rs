@@ -32,7 +32,7 @@ use update_task::{Updater, install_update, on_receive, start_update};
 
 use core::cell::RefCell;
 use core::mem::MaybeUninit;
-use core::sync::atomic::{AtomicBool, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use cortex_m::interrupt::{InterruptNumber, Mutex};
 use cortex_m::peripheral::NVIC;
 use cortex_m_rt::{ExceptionFrame, entry, exception};
@@ -46,8 +46,8 @@ use tcomp_firmware::app::{
 use tcomp_firmware::boot::REPORT_PERIODS;
 use tcomp_firmware::fault::{FaultKind, FaultRecord};
 use tcomp_firmware::replay::{
-    Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, MISS, STALL, TICK_HZ, TICKS_PER_PERIOD, UNIT_SERIAL,
-    Vector,
+    Board, CONFIG_IFOG1, CONFIG_IMU6, HANG, HOLD_FOR_UPDATE, MISS, STALL, TICK_HZ,
+    TICKS_PER_PERIOD, UNIT_SERIAL, Vector,
 };
 use tcomp_firmware::slots::{Choice, QEMU_LAYOUT, Source, choose};
 use tcomp_firmware::timing::TimeCheck;
@@ -96,6 +96,15 @@ static mut UPDATE: Option<Updater> = None;
 static mut REPORT: BootReport = BootReport::EMPTY;
 /// Set by the sample interrupt after the vector's last sample.
 static DONE: AtomicBool = AtomicBool::new(false);
+/// The update task's state as the loop sees it ([`COMMITTED`] once an update has committed),
+/// published by the receive interrupt.
+static UPDATE_STATE: AtomicU8 = AtomicU8::new(0);
+/// [`UPDATE_STATE`]: an update has committed.
+const COMMITTED: u8 = 2;
+/// Periods the loop holds past a [`HOLD_FOR_UPDATE`] vector's end waiting for an update to
+/// commit: 600 s of guest time (QEMU runs it in about a minute and a half of wall time), far
+/// longer than a 6-channel update takes (about 3 s of guest time) however slowly the host sends.
+const HOLD_LIMIT: usize = 120_000;
 
 unsafe extern "C" {
     static __models_start: u8;
@@ -421,6 +430,7 @@ fn start_loop(
         last_entry: 0,
         boot_flags,
         report,
+        held: 0,
     };
     send_report(&state.uart, state.report);
     cortex_m::interrupt::free(|cs| *LOOP.borrow(cs).borrow_mut() = Some(state));

@@ -26,9 +26,43 @@ pub(super) struct Loop {
     pub(super) boot_flags: u16,
     /// What this boot loaded, re-sent every `REPORT_PERIODS` samples.
     pub(super) report: &'static mut BootReport,
+    /// The last period served past the vector's end while holding for an update (0: none).
+    pub(super) held: u32,
 }
 
 impl Loop {
+    /// Past the vector's last sample of a [`HOLD_FOR_UPDATE`] vector while no update has
+    /// committed: one more period of the loop on the last record's inputs (its frame sent, not
+    /// compared or counted), so an update in progress never sees the unit stop. Bounded by
+    /// [`HOLD_LIMIT`] periods of guest time. Returns whether it held.
+    fn hold(&mut self, n: usize) -> bool {
+        let waiting = self.vector.flags & HOLD_FOR_UPDATE != 0
+            && UPDATE_STATE.load(Ordering::Acquire) != COMMITTED;
+        let Some(last) = self.vector.samples.checked_sub(1) else {
+            return false;
+        };
+        if !waiting || n - last > HOLD_LIMIT {
+            return false;
+        }
+        self.vector.load(last, &mut self.board);
+        let mut out = [Record::default(); MAX_CHANNELS];
+        let k = self.config.len().min(MAX_CHANNELS);
+        let out = out.get_mut(..k).unwrap_or(&mut []);
+        let (thermometers, counters) = self.board.snapshot();
+        self.app.sample_snapshot(thermometers, counters, out);
+        let timestamp = self
+            .vector
+            .timestamp(last)
+            .wrapping_add((n - last) as u64 * TICKS_PER_PERIOD);
+        let frame = self.app.frame(n as u32, timestamp, TICK_HZ, out);
+        let mut bytes = [0u8; MAX_FRAME_LEN];
+        if let Ok(len) = frame.encode(&mut bytes) {
+            self.uart.write_all(bytes.get(..len).unwrap_or(&[]));
+        }
+        self.held = n as u32;
+        true
+    }
+
     /// Sends the boot report, stamped with the next data frame's sequence number.
     pub(super) fn send_report(&mut self, sequence: u32) {
         tcomp_firmware::boot::stamp(self.report, sequence);
@@ -57,6 +91,14 @@ impl Loop {
         // The vector's records of the missed edges are skipped: the counter block latched over them.
         let n = self.run.next as usize + missed as usize;
         if n >= self.vector.samples {
+            // Past the end: the periods count on from the last one served.
+            let n = match self.held {
+                0 => n,
+                h => h as usize + 1 + missed as usize,
+            };
+            if self.hold(n) {
+                return;
+            }
             self.timer.stop();
             DONE.store(true, Ordering::Release);
             return;
@@ -70,9 +112,9 @@ impl Loop {
             self.app
                 .skip_periods(u16::try_from(missed).unwrap_or(u16::MAX));
         }
-        let (thermometers, mut counters) = self.board.snapshot();
+        let (thermometers, counters) = self.board.snapshot();
         let i0 = self.counter.now();
-        self.app.sample_snapshot(thermometers, &mut counters, out);
+        self.app.sample_snapshot(thermometers, counters, out);
         let i1 = self.counter.now();
         let instr = self.counter.ticks_between(i0, i1) * INSTRUCTIONS_PER_TICK;
         let r = &mut *self.run;

@@ -67,4 +67,10 @@ pub(super) fn on_receive() {
             cortex_m::interrupt::free(|_| port.write_all(reply.get(..n).unwrap_or(&[])));
         }
     }
+    let state = match (u.task.committed(), u.task.is_receiving()) {
+        (Some(_), _) => COMMITTED,
+        (None, true) => 1,
+        (None, false) => 0,
+    };
+    UPDATE_STATE.store(state, Ordering::Release);
 }
