@@ -27,6 +27,9 @@ pub mod trust;
 pub mod update;
 pub mod wiring;
 
+#[cfg(test)]
+mod trust_tests;
+
 #[cfg(target_os = "none")]
 mod board;
 #[cfg(target_os = "none")]

@@ -6,7 +6,7 @@
 //! It is the core's [`Receiver`] behind the core's frame [`Decoder`]: one protocol frame of
 //! receive buffer (75 B), and the reply encoded into a buffer of one reply frame.
 
-use core::sync::atomic::{AtomicU16, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU16, Ordering};
 use embedded_storage::nor_flash::NorFlash;
 use tcomp_core::frame::update_state;
 use tcomp_core::slots::{Active, Layout, SlotId};
@@ -21,10 +21,19 @@ pub const MAX_REPLY: usize = HEADER_LEN + 9 + MAX_SERIAL + 4;
 /// task runs in its own interrupt, the report is re-sent by the sample task.
 static LAST_UPDATE: AtomicU16 = AtomicU16::new(0);
 
+/// Set when an update ends (committed, refused or failed): the loop then sends its boot report
+/// at once, so the outcome is on the link while the host still listens.
+static REPORT_DUE: AtomicBool = AtomicBool::new(false);
+
 /// The last update since boot as the boot report carries it: ([`update_state`], reason code).
 pub fn last_update() -> (u8, u8) {
     let v = LAST_UPDATE.load(Ordering::Relaxed);
     ((v >> 8) as u8, v as u8)
+}
+
+/// True once after an update ended: the loop sends its boot report now, besides its cadence.
+pub fn take_report_due() -> bool {
+    REPORT_DUE.swap(false, Ordering::AcqRel)
 }
 
 /// The update task's state.

@@ -55,6 +55,9 @@ enum Command {
     Calibrate(Box<cmd::calibrate::Args>),
     /// Replace a unit's model image over its serial link (A/B slots, verified, committed last).
     Flash(cmd::flash::Args),
+    /// Make an Ed25519 key pair for signing calibration images, and the key block a unit is
+    /// provisioned with.
+    Keygen(cmd::keygen::Args),
 }
 
 fn main() -> ExitCode {
@@ -90,6 +93,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Demo(args) => cmd::demo::run(&args),
         Command::Frames(args) => cmd::frames::run(&args),
         Command::Flash(args) => cmd::flash::run(&args),
+        Command::Keygen(args) => cmd::keygen::run(&args),
     }
 }
 

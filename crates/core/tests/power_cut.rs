@@ -199,3 +199,140 @@ fn every_power_cut_boots_the_old_or_the_new_image() {
     assert_eq!(tally.mixed, 0);
     assert!(tally.old > 0 && tally.new > 0 && tally.empty > 0);
 }
+
+// --- The same proof with signature checks in the update path (issue 26) ---------------------
+//
+// Kept apart from the functions above (which the trial-boot work extends): a unit that verifies
+// Ed25519 signatures at boot (before a slot is chosen) and at COMMIT (before the commit word).
+
+mod signed {
+    use super::*;
+    use std::io::Read;
+    use tcomp_core::image::sign::{self, BLOCK_LEN, KeyStore};
+
+    /// A secret key made now from the operating system's generator.
+    pub fn fresh_key() -> [u8; 32] {
+        let mut k = [0u8; 32];
+        std::fs::File::open("/dev/urandom")
+            .unwrap()
+            .read_exact(&mut k)
+            .unwrap();
+        k
+    }
+
+    pub fn signed(image: &[u8], secret: &[u8; 32]) -> Vec<u8> {
+        let mut buf = image.to_vec();
+        buf.resize(image.len() + BLOCK_LEN, 0);
+        sign::sign(&mut buf, secret).unwrap();
+        buf
+    }
+
+    /// The unit's check: the image reads and its signature verifies against `keys`.
+    pub fn trusted(flash: &Flash, keys: &[u8], offset: u32, len: u32) -> Result<(), Reason> {
+        let (at, len) = (offset as usize, len as usize);
+        let bytes = flash.bytes().get(at..at + len).ok_or(Reason::Invalid)?;
+        Image::parse(bytes).map_err(|_| Reason::Invalid)?;
+        sign::verify(bytes, KeyStore(keys))
+            .map(|_| ())
+            .map_err(|_| Reason::BadSignature)
+    }
+
+    pub fn boot(flash: &mut Flash, keys: &[u8]) -> Option<Vec<u8>> {
+        let snapshot = flash.clone();
+        let active = select(flash, &LAYOUT, |_, o, l| trusted(&snapshot, keys, o, l).is_ok())
+            .unwrap()?;
+        let at = active.payload(&LAYOUT) as usize;
+        Some(flash.bytes()[at..at + active.header.length as usize].to_vec())
+    }
+
+    pub fn update(flash: &mut Flash, image: &[u8], keys: &[u8]) -> Status {
+        let snapshot = flash.clone();
+        let active = select(flash, &LAYOUT, |_, o, l| trusted(&snapshot, keys, o, l).is_ok())
+            .unwrap();
+        let mut rx = Receiver::new(LAYOUT, active);
+        let mut tx = Sender::new(image, 7);
+        let (mut unit_in, mut host_in) = (Decoder::new(), Decoder::new());
+        let mut frame = [0u8; MAX_FRAME];
+        while let Some(n) = tx.request(&mut frame) {
+            let mut reply_bytes = Vec::new();
+            for &b in &frame[..n] {
+                if let Some(p) = unit_in.push(b) {
+                    let reply = rx.handle(flash, &p, b"SN-TEST", |f, o, l| {
+                        trusted(f, keys, o, l)
+                    });
+                    let mut out = [0u8; MAX_FRAME];
+                    let m = reply.packet().encode(&mut out).unwrap();
+                    reply_bytes.extend_from_slice(&out[..m]);
+                }
+            }
+            if flash.is_dead() {
+                break;
+            }
+            for &b in &reply_bytes {
+                if let Some(p) = host_in.push(b) {
+                    tx.on_reply(&p);
+                }
+            }
+        }
+        tx.status()
+    }
+}
+
+/// With signature checks at boot and at COMMIT: a signed update cut after and inside every write
+/// step boots exactly the old or exactly the new image; an update signed by another key, cut
+/// anywhere or completed, never boots (the old image does).
+#[test]
+fn every_power_cut_of_a_signed_update_boots_the_old_or_the_new_image() {
+    let (station, rogue) = (signed::fresh_key(), signed::fresh_key());
+    let keys = tcomp_core::image::sign::public_key(&station).to_vec();
+    let old = signed::signed(&image(4), &station);
+    let new = signed::signed(&image(5), &station);
+    let bad = signed::signed(&image(6), &rogue);
+    let mut before = Box::new(Flash::new());
+    assert!(matches!(
+        signed::update(&mut before, &old, &keys),
+        Status::Done { .. }
+    ));
+    assert_eq!(signed::boot(&mut before, &keys).as_deref(), Some(&old[..]));
+
+    // The rogue image: refused at COMMIT, so no cut point can make it boot.
+    let mut probe = before.clone();
+    assert_eq!(
+        signed::update(&mut probe, &bad, &keys),
+        Status::Failed(tcomp_core::update::Failure::Unit(Reason::BadSignature))
+    );
+    assert_eq!(signed::boot(&mut probe, &keys).as_deref(), Some(&old[..]));
+
+    let mut probe = before.clone();
+    probe.plan(Cut::After(u32::MAX));
+    assert!(matches!(
+        signed::update(&mut probe, &new, &keys),
+        Status::Done { .. }
+    ));
+    let steps = probe.steps();
+    let (mut olds, mut news) = (0u32, 0u32);
+    for k in 1..=steps {
+        for cut in [Cut::After(k), Cut::Torn(k)] {
+            for (image, may_boot) in [(&new, true), (&bad, false)] {
+                let mut flash = before.clone();
+                flash.plan(cut);
+                signed::update(&mut flash, image, &keys);
+                flash.power_on();
+                let booted = signed::boot(&mut flash, &keys);
+                match booted.as_deref() {
+                    Some(b) if b == &old[..] => olds += 1,
+                    Some(b) if may_boot && b == &new[..] => news += 1,
+                    other => panic!(
+                        "{cut:?}: booted {:?} bytes, neither the old nor the new signed image",
+                        other.map(<[u8]>::len)
+                    ),
+                }
+            }
+        }
+    }
+    println!(
+        "POWER-CUT-SIGNED cut_points={} steps={steps} old={olds} new={news} mixed=0 rogue_booted=0",
+        4 * steps
+    );
+    assert!(news >= 1 && olds > 0);
+}

@@ -23,7 +23,8 @@ use std::path::PathBuf;
 use std::time::Duration;
 use tcomp_board_description::Board;
 use tcomp_core::image::Image;
-use tcomp_core::update::Status;
+use tcomp_core::frame::{DEVELOPMENT, image_state, update_state};
+use tcomp_core::update::{Reason, Status};
 use tcomp_core::update::wire::MAX_FRAME;
 use tcomp_train::progress::{Progress, Unit};
 
@@ -139,17 +140,43 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     bar.clear();
     let info = outcome.info;
     let serial = info.map(|i| String::from_utf8_lossy(i.serial()).into_owned());
+    let slot_name = |i: u8| if i == 0 { "A" } else { "B" };
+    let unit_report = outcome.report.map(|r| {
+        json!({
+            "image_state": image_state::name(r.image_state),
+            "signer": (r.signer != 0).then(|| format!("{:016x}", r.signer)),
+            "development_build": r.flags & DEVELOPMENT != 0,
+            "last_update": update_state::name(r.update),
+            "last_update_reason": (r.update == update_state::REFUSED
+                || r.update == update_state::FAILED)
+                .then(|| Reason::from_u8(r.update_reason).describe()),
+        })
+    });
     let (slot, generation) = match outcome.status {
         Status::Done { slot, generation } => (slot, generation),
-        Status::Failed(why) if outcome.aborted => bail!(
-            "--port {port_name}: update failed: {why} (session aborted; the unit keeps its models)"
-        ),
         Status::Failed(why) => {
-            bail!("--port {port_name}: update failed: {why} (the unit keeps its models)")
+            if args.json {
+                let value = json!({
+                    "port": port_name,
+                    "baud": baud,
+                    "image": args.image.display().to_string(),
+                    "serial": serial,
+                    "result": "failed",
+                    "reason": why.to_string(),
+                    "aborted": outcome.aborted,
+                    "unit_report": unit_report,
+                });
+                outln!("{}", serde_json::to_string_pretty(&value)?);
+            }
+            if outcome.aborted {
+                bail!(
+                    "--port {port_name}: update failed: {why} (session aborted; the unit keeps its models)"
+                );
+            }
+            bail!("--port {port_name}: update failed: {why} (the unit keeps its models)");
         }
         Status::Running { .. } => bail!("--port {port_name}: the update did not finish"),
     };
-    let slot_name = |i: u8| if i == 0 { "A" } else { "B" };
     if args.json {
         let value = json!({
             "port": port_name,
@@ -167,6 +194,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "output_lost": outcome.output.lost,
             "output_first_sequence": outcome.first_sequence,
             "output_last_sequence": outcome.last_sequence,
+            "unit_report": unit_report,
         });
         outln!("{}", serde_json::to_string_pretty(&value)?);
     } else {

@@ -14,7 +14,7 @@
 use anyhow::{Context, bail};
 use clap::Args as ClapArgs;
 use std::path::{Path, PathBuf};
-use tcomp_core::image::{Entry, Fnv64, ImageSpec, MAX_ENTRIES, Mismatch, Provenance};
+use tcomp_core::image::{Entry, Fnv64, ImageSpec, MAX_ENTRIES, Mismatch, Provenance, sign};
 
 use tcomp_board_description::{Board, targets};
 
@@ -53,6 +53,10 @@ pub struct Args {
     /// image can be rebuilt bit for bit.
     #[arg(long, value_name = "SECONDS")]
     pub created: Option<u64>,
+    /// Sign the image with this secret key (`tcomp keygen`'s PREFIX.key): units run only images
+    /// signed by a key they were provisioned with.
+    #[arg(long, value_name = "KEY")]
+    pub sign: Option<PathBuf>,
     /// Where to write the image.
     #[arg(long)]
     pub out: PathBuf,
@@ -73,6 +77,8 @@ struct ImageJson {
     board: String,
     board_hash: String,
     serial: u64,
+    /// The signing key's id, or null for an unsigned image.
+    signer: Option<String>,
     channels: Vec<ChannelJson>,
 }
 
@@ -285,6 +291,14 @@ pub fn build(
     Ok(image)
 }
 
+/// Appends the signature block (`tcomp_core::image::sign`) to `image`; returns the key id.
+pub fn sign_image(image: &mut Vec<u8>, secret: &[u8; 32]) -> anyhow::Result<sign::KeyId> {
+    let len = image.len();
+    image.resize(len + sign::BLOCK_LEN, 0);
+    sign::sign(image, secret)?;
+    Ok(sign::KeyId::of(&sign::public_key(secret)))
+}
+
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     if args.models.len() > MAX_ENTRIES {
@@ -297,12 +311,24 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         blobs.push(read_model_arg(spec)?);
         build(&board, args.serial, 0, &blobs)?;
     }
-    let image = build(&board, args.serial, created(args)?, &blobs)?;
+    let secret = args
+        .sign
+        .as_deref()
+        .map(super::keygen::read_secret)
+        .transpose()?;
+    let mut image = build(&board, args.serial, created(args)?, &blobs)?;
+    let signer = match &secret {
+        Some(secret) => Some(sign_image(&mut image, secret)?),
+        None => None,
+    };
     let mut inputs: Vec<(&str, &Path)> = blobs
         .iter()
         .map(|l| ("--model", l.path.as_path()))
         .collect();
     inputs.push(("--board", args.board.as_path()));
+    if let Some(key) = &args.sign {
+        inputs.push(("--sign", key.as_path()));
+    }
     super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
     super::output::check_file_output("--out", &args.out)?;
     tcomp_train::blob_io::write_atomic(&args.out, &image)?;
@@ -317,6 +343,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             board: board.name.clone(),
             board_hash: format!("{:016x}", board.hash()),
             serial: args.serial,
+            signer: signer.map(|k| k.to_string()),
             channels: blobs
                 .iter()
                 .map(|b| ChannelJson {
@@ -331,13 +358,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         return Ok(());
     }
     outln!(
-        "wrote {} ({} bytes, {} models for board {} (hash {:016x}), unit {}): send it with `tcomp flash`, or write it bare at {}",
+        "wrote {} ({} bytes, {} models for board {} (hash {:016x}), unit {}, {}): send it with `tcomp flash`, or write it bare at {}",
         args.out.display(),
         image.len(),
         blobs.len(),
         super::printable::text(&board.name),
         board.hash(),
         args.serial,
+        signer.map_or("unsigned".to_string(), |k| format!("signed by key {k}")),
         targets::probe_addresses()
     );
     Ok(())

@@ -7,6 +7,10 @@
 //! update writes slot B (`0x003F_8000`) and commits it; when the vector ends the firmware resets
 //! (SYSRESETREQ). QEMU then loads the ELF, the vector and slot A's bare image again, but slot B
 //! survives in RAM, so the next boot must choose slot B, generation 1, and load all six models.
+//!
+//! Before it, the same image signed by a key the unit was not provisioned with is sent: the unit
+//! must refuse it at COMMIT (RESULT `UnknownKey`), keep running its models (the boot's records
+//! stay bit-exact) and say so in the boot report it sends at once (last update refused, and why).
 
 use crate::field;
 use crate::proc::{self, Bounded};
@@ -29,18 +33,21 @@ const PTY_LIMIT: Duration = Duration::from_secs(30);
 
 /// Runs the update; `vector` is an IMU6 vector without injected board faults built for
 /// `initial` (its expected outputs and `hash`), `samples` the records it serves; `update` is the
-/// image sent.
+/// image sent, after `rogue` (signed by another key) is refused.
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     work: &Path,
     elf: &Path,
     initial: &Path,
     vector: &Path,
+    rogue: &Path,
     update: &Path,
     hash: u32,
     samples: usize,
 ) -> Result<()> {
     let (mut qemu, stdout, pty) = start_qemu(elf, initial, vector)?;
     let log = proc::collect(stdout);
+    refused(work, &pty, rogue)?;
     let flash = proc::output(
         Command::new(work.join("../debug/tcomp"))
             .args([
@@ -99,6 +106,47 @@ pub fn run(
     }
     println!(
         "update over the UART: committed to slot B, {n} output frames during it (sequences {first}..={last}, none lost); after the reset: slot B, generation 1, 6 of 6 models"
+    );
+    Ok(())
+}
+
+/// `tcomp flash` of an image signed by a key the unit does not hold: refused before the commit,
+/// with the reason in the RESULT and in the unit's boot report, which still names its image.
+fn refused(work: &Path, pty: &str, rogue: &Path) -> Result<()> {
+    let out = proc::output(
+        Command::new(work.join("../debug/tcomp"))
+            .args([
+                "flash",
+                "--port",
+                pty,
+                "--json",
+                "--timeout-ms",
+                REPLY_TIMEOUT_MS,
+                "--board",
+            ])
+            .arg(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../firmware/descriptions/imu6-rlg-qma.toml"
+            ))
+            .arg(rogue),
+        "`tcomp flash` of an image signed by another key",
+        FLASH_LIMIT,
+    )?;
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    print!("{text}");
+    let held = "image signed by a key this unit does not hold";
+    let says = |k: &str, v: &str| text.contains(&format!("\"{k}\": \"{v}"));
+    if out.status.success()
+        || !says("result", "failed")
+        || !says("reason", &format!("the unit refused: {held}"))
+        || !says("last_update", "refused")
+        || !says("last_update_reason", held)
+        || !says("image_state", "ok")
+    {
+        bail!("the image signed by another key was not refused as it should be: {text}");
+    }
+    println!(
+        "update with an image signed by another key: refused before the commit ({held}); the unit's boot report says so, and its image is still the one it ran"
     );
     Ok(())
 }

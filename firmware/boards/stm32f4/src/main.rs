@@ -293,7 +293,7 @@ mod app {
                 r.status |= status::OVERRUN;
             }
         }
-        if l.sequence.is_multiple_of(REPORT_PERIODS) {
+        if l.sequence.is_multiple_of(REPORT_PERIODS) || tcomp_firmware::update::take_report_due() {
             // At boot and every 10 s, before the data frame it announces (never on the loop's
             // timed path: the sample is done).
             tcomp_firmware::boot::stamp(l.report, *l.sequence);

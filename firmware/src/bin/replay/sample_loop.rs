@@ -59,6 +59,9 @@ impl Loop {
         if let Ok(len) = frame.encode(&mut bytes) {
             self.uart.write_all(bytes.get(..len).unwrap_or(&[]));
         }
+        if tcomp_firmware::update::take_report_due() {
+            self.send_report(n as u32 + 1);
+        }
         self.held = n as u32;
         true
     }
@@ -159,7 +162,8 @@ impl Loop {
         if let Ok(len) = frame.encode(&mut bytes) {
             self.uart.write_all(bytes.get(..len).unwrap_or(&[]));
         }
-        if (n as u32 + 1).is_multiple_of(REPORT_PERIODS) {
+        if (n as u32 + 1).is_multiple_of(REPORT_PERIODS) || tcomp_firmware::update::take_report_due()
+        {
             self.send_report(n as u32 + 1);
         }
         let r = &mut *self.run;

@@ -10,7 +10,7 @@ use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
 use tcomp_core::frame;
 use tcomp_core::update::wire::{Decoder, MAX_FRAME};
-use tcomp_core::update::{Info, Sender, Status};
+use tcomp_core::update::{Failure, Info, Sender, Status};
 
 /// How long to wait for replies.
 #[derive(Clone, Copy, Debug)]
@@ -36,6 +36,9 @@ pub struct Outcome {
     pub output: frame::Stats,
     /// Their first and last sequence numbers.
     pub first_sequence: Option<u32>,
+    /// The unit's last boot report seen (the unit sends one as soon as an update ends: its image
+    /// state, signer and the update's outcome with its reason).
+    pub report: Option<frame::BootReport>,
     /// See `first_sequence`.
     pub last_sequence: Option<u32>,
 }
@@ -56,6 +59,7 @@ pub fn transfer<L: Read + Write>(
     let mut replies = Decoder::new();
     let mut outputs = frame::Decoder::new();
     let (mut first, mut last) = (None, None);
+    let mut report = None;
     let mut request = [0u8; MAX_FRAME];
     let mut buf = [0u8; 4096];
     while let Some(n) = tx.request(&mut request) {
@@ -90,11 +94,13 @@ pub fn transfer<L: Read + Write>(
             for &b in buf.get(..got).unwrap_or(&[]) {
                 // Counted from the unit's first reply on: the update's span.
                 let counting = tx.info().is_some();
-                outputs.feed(&[b], |f| {
-                    if counting {
+                outputs.feed_items(&[b], |item| match item {
+                    frame::Item::Data(f) if counting => {
                         first.get_or_insert(f.sequence);
                         last = Some(f.sequence);
                     }
+                    frame::Item::Boot(r) => report = Some(r),
+                    frame::Item::Data(_) => {}
                 });
                 if !counting {
                     outputs = frame::Decoder::new();
@@ -120,7 +126,33 @@ pub fn transfer<L: Read + Write>(
             progress(sent, tx.len());
         }
     }
+    // The unit answers the update's end with a boot report (its outcome and reason): when the
+    // unit answered the last request (not after a timeout), listen for it a little longer, ten
+    // reply timeouts at most (620 ms at 921,600 baud; a board sends it within one period).
+    let answered = matches!(
+        tx.status(),
+        Status::Done { .. } | Status::Failed(Failure::Unit(_))
+    );
+    if answered {
+        let deadline = Instant::now() + timing.commit.min(timing.reply * 10);
+        let ended = |r: &Option<frame::BootReport>| {
+            r.is_some_and(|r| r.update != frame::update_state::NONE)
+        };
+        while !ended(&report) && Instant::now() < deadline {
+            let got = match link.read(&mut buf) {
+                Ok(k) => k,
+                Err(e) if e.kind() == ErrorKind::BrokenPipe => break,
+                Err(_) => 0,
+            };
+            outputs.feed_items(buf.get(..got).unwrap_or(&[]), |item| {
+                if let frame::Item::Boot(r) = item {
+                    report = Some(r);
+                }
+            });
+        }
+    }
     Ok(Outcome {
+        report,
         status: tx.status(),
         info: tx.info(),
         repeats: tx.repeats(),
