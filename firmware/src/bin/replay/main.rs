@@ -337,7 +337,18 @@ fn main() -> ! {
     // SAFETY: MODELS is mapped RAM under QEMU; the update writes only the inactive slot, and the
     // loop's models borrow only the active one (`choice.image`).
     let mut flash = unsafe { RamFlash::new(models.as_ptr(), models.len()) };
+    // The boot's choice verifies each candidate's signature: counted (SysTick, 5 instructions a
+    // tick under `-icount shift=3`) for the verifier's cost at boot.
+    let counter = InstructionCounter::new(cp.SYST);
+    let v0 = counter.now();
     let choice = choose(&mut flash, &QEMU_LAYOUT, models, |b| trust().check(b));
+    let v1 = counter.now();
+    defmt::println!(
+        "BOOT-VERIFY instructions={=u32} source={} signer={}",
+        counter.ticks_between(v0, v1) * INSTRUCTIONS_PER_TICK,
+        choice.source,
+        choice.signer
+    );
     let (image, source) = (choice.image, choice.source);
     if after_update {
         update_boot(app, image, source);
@@ -376,7 +387,7 @@ fn main() -> ! {
     write_report(report, &choice, config, &loaded, boot_flags != 0, run.next);
 
     let port = start_update(cp.NVIC);
-    start_loop(app, run, vector, config, cp.SYST, boot_flags, report);
+    start_loop(app, run, vector, config, counter, boot_flags, report);
     // A byte already waiting raises the interrupt at once.
     port.enable_rx_interrupt();
     // SAFETY: UPDATE is set; the handler (DefaultHandler, IRQ 0) is its only user from here on.
@@ -403,7 +414,7 @@ fn start_loop(
     run: &'static mut Run,
     vector: Vector<'static>,
     config: &'static [ChannelConfig],
-    syst: cortex_m::peripheral::SYST,
+    counter: InstructionCounter,
     boot_flags: u16,
     report: &'static mut BootReport,
 ) {
@@ -423,7 +434,7 @@ fn start_loop(
         timer,
         time,
         watchdog,
-        counter: InstructionCounter::new(syst),
+        counter,
         check: TimeCheck::new(TICKS_PER_PERIOD),
         next_edge: t_start.wrapping_add(PERIOD),
         edges: 0,
