@@ -10,7 +10,7 @@ use std::process::Command;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
-use tcomp_core::frame::{ChannelOutput, Frame};
+use tcomp_core::frame::{BootReport, ChannelOutput, Frame, update_state};
 use tcomp_core::image::{Image, write_image};
 use tcomp_core::slots::sim::SimNor;
 use tcomp_core::slots::{Layout, SlotId, select};
@@ -81,6 +81,15 @@ fn unit(mut port: TTYPort, stop: Arc<AtomicBool>) -> Flash {
                 let mut f = [0u8; MAX_FRAME];
                 let m = reply.packet().encode(&mut f).unwrap();
                 out.extend_from_slice(&f[..m]);
+                // As the firmware does: its boot report as soon as an update ends.
+                if reply.kind() == Kind::Result {
+                    let mut r = BootReport::default();
+                    r.unit_serial = 7;
+                    r.update = update_state::COMMITTED;
+                    let mut b = [0u8; 128];
+                    let k = r.encode(&mut b).unwrap();
+                    out.extend_from_slice(&b[..k]);
+                }
             }
         }
         let frame = Frame::new(
@@ -140,6 +149,7 @@ fn an_update_over_a_pty_commits_and_keeps_the_output_frames() {
         "the lost reply was retried"
     );
     assert!(v["output_frames"].as_u64().unwrap() > 5);
+    assert_eq!(v["unit_report"]["last_update"], "committed", "{v}");
     assert_eq!(v["output_lost"], 0);
     let active = select(&mut flash, &LAYOUT, validate).unwrap().unwrap();
     assert_eq!(active.slot, SlotId::A);
