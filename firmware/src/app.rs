@@ -78,8 +78,8 @@ pub const TEMP_STEP_MARGIN_C: f32 = 0.5;
 /// once with their names in [`tcomp_core::frame::status`] (the frame carries this word).
 pub mod status {
     pub use tcomp_core::frame::status::{
-        INPUT_FAULT, MODEL_FAULT, NO_MODEL, OK, OUT_OF_RANGE, OVERRUN, SENSOR_ERROR, STUCK,
-        TEMP_JUMP, TIME_JUMP, WATCHDOG_RESET,
+        FIRST_SAMPLE, INPUT_FAULT, MODEL_FAULT, NO_MODEL, OK, OUT_OF_RANGE, OVERRUN, SENSOR_ERROR,
+        STUCK, TEMP_JUMP, TIME_JUMP, WATCHDOG_RESET,
     };
 }
 

@@ -7,24 +7,26 @@
 
 use crate::app::{ChannelConfig, LoadError, PERIOD_S};
 use crate::image::{Image, ImageError};
-use crate::slots::Choice;
 use crate::trust::{self, Signer};
 use tcomp_core::frame::{
     BOOT_REPORT_PERIOD_S, BootReport, ChannelState, DEVELOPMENT, WATCHDOG, image_state,
 };
+use tcomp_core::update::Reason;
 
 /// Samples between two reports: [`BOOT_REPORT_PERIOD_S`] at the loop's rate.
 pub const REPORT_PERIODS: u32 = (BOOT_REPORT_PERIOD_S as f32 / PERIOD_S) as u32;
 
-/// The report of a boot that chose `choice` on the unit `unit_serial`, with each channel of
-/// `config` loaded as `loaded` says; `watchdog` when the boot followed a watchdog reset. A
-/// development build ([`trust::DEVELOPMENT`]) says so in its flags; when no image runs because
-/// the one found was refused (unsigned, signed by an unknown key, a bad signature, another
-/// unit's), the image state says why. Not inlined: a boot path keeps its frame off the model
+/// The report of a boot that runs `image` (signed by `signer`) on the unit `unit_serial`, with
+/// each channel of `config` loaded as `loaded` says; `watchdog` when the boot followed a watchdog
+/// reset. A development build ([`trust::DEVELOPMENT`]) says so in its flags; when no image runs
+/// because the one found was refused (`refused`: unsigned, signed by an unknown key, a bad
+/// signature, another unit's), the image state says why. Not inlined: a boot path keeps its frame off the model
 /// decoder's stack.
 #[inline(never)]
 pub fn report(
-    choice: &Choice<'_>,
+    image: &[u8],
+    signer: Option<Signer>,
+    refused: Option<Reason>,
     unit_serial: u64,
     config: &[ChannelConfig],
     loaded: &[Result<(), LoadError>],
@@ -34,8 +36,8 @@ pub fn report(
     r.unit_serial = unit_serial;
     r.flags =
         if watchdog { WATCHDOG } else { 0 } | if trust::DEVELOPMENT { DEVELOPMENT } else { 0 };
-    r.signer = choice.signer.map_or(0, |s: Signer| s.report_id());
-    match Image::parse(choice.image) {
+    r.signer = signer.map_or(0, |s: Signer| s.report_id());
+    match Image::parse(image) {
         Ok(i) => {
             r.image_version = i.version();
             if let Some(h) = i.header() {
@@ -52,7 +54,7 @@ pub fn report(
             };
         }
         Err(ImageError::NoImage) => {
-            r.image_state = choice.refused.map_or(image_state::NONE, trust::image_state);
+            r.image_state = refused.map_or(image_state::NONE, trust::image_state);
         }
         Err(_) => r.image_state = image_state::INVALID,
     }

@@ -1,22 +1,20 @@
-//! The firmware: the compensation loop ([`app`]), the fault record kept across resets ([`fault`]),
-//! the time-base check ([`timing`]), the boot report ([`boot`]), the channel tables generated from
-//! the board descriptions ([`wiring`]),
-//! the model-blob image in flash ([`image`]) and its two slots ([`slots`]), which images the unit
-//! runs (made for it, signed by a provisioned key: [`trust`]), the update task that
-//! rewrites them over the serial link ([`update`]), the replay board of the QEMU run ([`replay`]), and
-//! board support for the binaries (semihosting exit codes, the SysTick instruction counter).
+//! The firmware's application, once for every board: the compensation loop ([`app`]), the tasks
+//! that run it on a board ([`application`]: an RTIC 2 app each board binary binds, with the frame
+//! queue, the update task and the watchdog policy), the fault record kept across resets
+//! ([`fault`]), the time-base check ([`timing`]), the boot report ([`boot`]), the channel tables
+//! generated from the board descriptions ([`wiring`]), the model-blob image in flash ([`image`])
+//! and its two slots ([`slots`]), which images the unit runs (made for it, signed by a provisioned
+//! key: [`trust`]), the update task's protocol end ([`update`]), and the replay board
+//! of the QEMU run ([`replay`]).
 //!
-//! Only the board support touches hardware and is compiled for the target alone
-//! (`cfg(target_os = "none")`); the rest builds on the host, where `cargo xtask qemu` runs the very
-//! same loop over the replay vector to produce the outputs the firmware must reproduce bit for bit.
-//!
-//! Under QEMU with `-icount shift=0` every guest instruction takes one nanosecond of virtual time and
-//! SysTick runs from the 25 MHz board clock, so one SysTick tick is 40 instructions: counting ticks
-//! counts instructions deterministically (QEMU does not emulate the DWT cycle counter). The replay
-//! runs with `-icount shift=3` (8 ns per instruction): one tick is 5 instructions there.
+//! Nothing here touches hardware: the board crates (`boards/qemu`, `boards/stm32f4`) own the
+//! registers, and everything here builds and is tested on the host, where `cargo xtask qemu` runs
+//! the very same loop over the replay vector to produce the outputs the QEMU board must reproduce
+//! bit for bit.
 #![no_std]
 
 pub mod app;
+pub mod application;
 pub mod boot;
 pub mod fault;
 pub mod image;
@@ -29,11 +27,6 @@ pub mod wiring;
 
 #[cfg(test)]
 mod trust_tests;
-
-#[cfg(target_os = "none")]
-mod board;
-#[cfg(target_os = "none")]
-pub use board::*;
 
 /// FNV-1a over the bits of a record, folded into `hash`: the running output hash both sides print.
 pub fn fold_hash(hash: u32, record: &app::Record) -> u32 {

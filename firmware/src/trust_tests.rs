@@ -8,9 +8,10 @@
 
 extern crate std;
 use crate::boot::report;
-use crate::slots::{QEMU_LAYOUT, Source, choose_mapped};
+use crate::slots::{Choice, MappedFlash, QEMU_LAYOUT, Source, boot, choose, confirm};
 use crate::trust::{Signer, Trust};
 use crate::update::{MAX_REPLY, UpdateTask};
+use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
 use std::io::Read;
 use std::vec;
 use std::vec::Vec;
@@ -19,6 +20,7 @@ use tcomp_core::frame::{DEVELOPMENT, image_state, update_state};
 use tcomp_core::image::sign::{self, BLOCK_LEN, KeyId};
 use tcomp_core::image::{Entry, ImageSpec};
 use tcomp_core::slots::sim::SimNor;
+use tcomp_core::slots::{SlotId, Trial, trial};
 use tcomp_core::update::wire::{Decoder, MAX_FRAME};
 use tcomp_core::update::{Failure, Reason, Sender, Status};
 
@@ -146,7 +148,43 @@ fn another_key_another_unit_and_no_signature_are_refused() {
     );
 }
 
-type Flash = SimNor<{ 64 * 1024 }, { 32 * 1024 }>;
+type Sim = SimNor<{ 64 * 1024 }, { 32 * 1024 }>;
+
+/// The flash model seen as a board's mapped `MODELS` region.
+#[derive(Clone)]
+struct Flash(Sim);
+
+impl ErrorType for Flash {
+    type Error = <Sim as ErrorType>::Error;
+}
+
+impl ReadNorFlash for Flash {
+    const READ_SIZE: usize = 1;
+    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+        self.0.read(offset, bytes)
+    }
+    fn capacity(&self) -> usize {
+        self.0.capacity()
+    }
+}
+
+impl NorFlash for Flash {
+    const WRITE_SIZE: usize = <Sim as NorFlash>::WRITE_SIZE;
+    const ERASE_SIZE: usize = <Sim as NorFlash>::ERASE_SIZE;
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        self.0.erase(from, to)
+    }
+    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        self.0.write(offset, bytes)
+    }
+}
+
+impl MappedFlash for Flash {
+    fn mapped(&self, offset: u32, len: u32) -> Option<&[u8]> {
+        let at = offset as usize;
+        self.0.bytes().get(at..at.checked_add(len as usize)?)
+    }
+}
 
 /// An update of `image` through the update task, validated by `trust` at COMMIT.
 fn update(flash: &mut Flash, task: &mut UpdateTask, image: &[u8], trust: &Trust<'_>) -> Status {
@@ -157,8 +195,8 @@ fn update(flash: &mut Flash, task: &mut UpdateTask, image: &[u8], trust: &Trust<
         for &b in &frame[..n] {
             let mut reply = [0u8; MAX_REPLY];
             let validate = |f: &mut Flash, off: u32, len: u32| {
-                let (at, len) = (off as usize, len as usize);
-                trust.check_payload(&f.bytes()[at..at + len]).map(|_| ())
+                f.mapped(off, len)
+                    .map_or(Err(Reason::Flash), |b| trust.check_payload(b).map(|_| ()))
             };
             if let Some(m) = task.push(b, flash, b"SN", validate, &mut reply) {
                 for &r in &reply[..m] {
@@ -172,35 +210,56 @@ fn update(flash: &mut Flash, task: &mut UpdateTask, image: &[u8], trust: &Trust<
     tx.status()
 }
 
+/// The bytes a choice runs.
+fn running(flash: &Flash, c: &Choice) -> Vec<u8> {
+    c.image
+        .and_then(|(off, len)| flash.mapped(off, len))
+        .unwrap_or(&[])
+        .to_vec()
+}
+
+/// The boot report of a choice (no channel table: the image fields and the trust fields).
+fn report_of(flash: &Flash, c: &Choice) -> tcomp_core::frame::BootReport {
+    report(
+        &running(flash, c),
+        c.signer,
+        c.refused,
+        UNIT,
+        &[],
+        &[],
+        false,
+    )
+}
+
 #[test]
 fn the_boot_and_the_update_run_only_trusted_images() {
     let (station, rogue) = (fresh_key(), fresh_key());
     let public = sign::public_key(&station);
     let trust = production(&public);
+    let accept = |b: &[u8]| trust.check(b);
     let old = signed(&image(UNIT, 4), &station);
-    let mut flash = Flash::new();
-    let region = flash.bytes().to_vec();
-    let mut task = UpdateTask::new(
-        QEMU_LAYOUT,
-        choose_mapped(&QEMU_LAYOUT, &region, |b| trust.check(b)).active,
-    );
+    let mut flash = Flash(Sim::new());
+    let mut task = UpdateTask::new(QEMU_LAYOUT, choose(&mut flash, &QEMU_LAYOUT, accept).active);
     assert!(matches!(
         update(&mut flash, &mut task, &old, &trust),
         Status::Done { .. }
     ));
     assert_eq!(task.outcome(), (update_state::COMMITTED, 0));
 
-    // Booted: the signed image runs, and the report names its signer.
-    let region = flash.bytes().to_vec();
-    let choice = choose_mapped(&QEMU_LAYOUT, &region, |b| trust.check(b));
-    assert_eq!(choice.source, Source::Slot(tcomp_core::slots::SlotId::A, 1));
-    assert_eq!(choice.signer, Some(Signer::Key(KeyId::of(&public))));
-    let r = report(&choice, UNIT, &[], &[], false);
+    // Booted: the signed image runs on trial, and the report names its signer; confirmed.
+    let c = boot(&mut flash, &QEMU_LAYOUT, accept).unwrap();
+    assert_eq!((c.source, c.trial), (Source::Slot(SlotId::A, 1), true));
+    assert_eq!(c.signer, Some(Signer::Key(KeyId::of(&public))));
+    let r = report_of(&flash, &c);
     assert_eq!(r.signer, KeyId::of(&public).as_u64());
     assert_eq!(r.flags & DEVELOPMENT, 0);
+    confirm(&mut flash, &QEMU_LAYOUT, SlotId::A).unwrap();
+    let c = boot(&mut flash, &QEMU_LAYOUT, accept).unwrap();
+    assert_eq!((c.source, c.trial), (Source::Slot(SlotId::A, 1), false));
 
-    // An update signed by another key: refused at COMMIT, the reason kept for the report.
-    let mut task = UpdateTask::new(QEMU_LAYOUT, choice.active);
+    // An update signed by another key: refused at COMMIT, the reason kept for the report; the
+    // old image boots, confirmed, and the boot erases the refused session's slot.
+    let mut task = UpdateTask::new(QEMU_LAYOUT, c.active);
     let rogue_image = signed(&image(UNIT, 5), &rogue);
     assert_eq!(
         update(&mut flash, &mut task, &rogue_image, &trust),
@@ -210,33 +269,86 @@ fn the_boot_and_the_update_run_only_trusted_images() {
         task.outcome(),
         (update_state::REFUSED, Reason::UnknownKey as u8)
     );
-    let region = flash.bytes().to_vec();
-    let choice = choose_mapped(&QEMU_LAYOUT, &region, |b| trust.check(b));
-    assert_eq!(choice.image.len(), old.len());
-    assert_eq!(choice.image, &old[..]);
+    let c = boot(&mut flash, &QEMU_LAYOUT, accept).unwrap();
+    assert_eq!((c.source, c.trial), (Source::Slot(SlotId::A, 1), false));
+    assert_eq!(running(&flash, &c), old);
+    assert!(flash.0.bytes()[32 * 1024..].iter().all(|&b| b == 0xFF));
 
     // A unit provisioned with no key runs nothing, and its report says why.
     let none = production(&[0xFF; 128]);
-    let choice = choose_mapped(&QEMU_LAYOUT, &region, |b| none.check(b));
-    assert_eq!(choice.source, Source::None);
-    let r = report(&choice, UNIT, &[], &[], false);
-    assert_eq!(r.image_state, image_state::UNKNOWN_KEY);
+    let c = choose(&mut flash, &QEMU_LAYOUT, |b| none.check(b));
+    assert_eq!(c.source, Source::None);
+    assert_eq!(report_of(&flash, &c).image_state, image_state::UNKNOWN_KEY);
 }
 
-/// A bare image a probe wrote at slot A is checked like a slot's.
+/// The trust check comes before the trial scheme: a committed slot whose signature no longer
+/// verifies (its key revoked) is passed over like a corrupt one, never put on trial or
+/// confirmed, and the unit runs the confirmed image before it.
+#[test]
+fn a_slot_refused_at_boot_is_never_put_on_trial() {
+    let (station, second) = (fresh_key(), fresh_key());
+    let mut keys = sign::public_key(&station).to_vec();
+    keys.extend_from_slice(&sign::public_key(&second));
+    let both = production(&keys);
+    let mut flash = Flash(Sim::new());
+    let mut task = UpdateTask::new(QEMU_LAYOUT, None);
+    let one = signed(&image(UNIT, 7), &station);
+    assert!(matches!(
+        update(&mut flash, &mut task, &one, &both),
+        Status::Done { .. }
+    ));
+    let c = boot(&mut flash, &QEMU_LAYOUT, |b| both.check(b)).unwrap();
+    confirm(&mut flash, &QEMU_LAYOUT, SlotId::A).unwrap();
+    let c2 = boot(&mut flash, &QEMU_LAYOUT, |b| both.check(b)).unwrap();
+    assert_eq!((c.trial, c2.trial), (true, false));
+    let mut task = UpdateTask::new(QEMU_LAYOUT, c2.active);
+    let two = signed(&image(UNIT, 8), &second);
+    assert!(matches!(
+        update(&mut flash, &mut task, &two, &both),
+        Status::Done { .. }
+    ));
+    // The second key is revoked (its block zeroed) before slot B's first boot.
+    keys[32..].fill(0);
+    let revoked = production(&keys);
+    let c = boot(&mut flash, &QEMU_LAYOUT, |b| revoked.check(b)).unwrap();
+    assert_eq!((c.source, c.trial), (Source::Slot(SlotId::A, 1), false));
+    assert_eq!(c.refused, Some(Reason::UnknownKey));
+    assert_eq!(running(&flash, &c), one);
+    assert_eq!(
+        trial(&mut flash, &QEMU_LAYOUT, SlotId::B).unwrap(),
+        Trial::Fresh,
+        "a refused slot got a trial word"
+    );
+}
+
+/// A bare image a probe wrote at slot A is checked like a slot's; refused, it does not run but is
+/// kept (an update writes slot B).
 #[test]
 fn a_probes_unsigned_image_does_not_run_in_a_production_build() {
     let station = fresh_key();
     let public = sign::public_key(&station);
+    let trust = production(&public);
+    let mut flash = Flash(Sim::new());
+    let mut bare = image(UNIT, 6);
+    bare.resize(bare.len().next_multiple_of(4), 0);
+    flash.write(0, &bare).unwrap();
+    let c = boot(&mut flash, &QEMU_LAYOUT, |b| trust.check(b)).unwrap();
+    assert_eq!(
+        (c.source, c.refused),
+        (Source::None, Some(Reason::Unsigned))
+    );
+    assert_eq!(c.active.map(|a| a.slot), Some(SlotId::A));
+    assert_eq!(
+        &flash.0.bytes()[..bare.len()],
+        &bare[..],
+        "the probe's image was erased"
+    );
+    assert_eq!(report_of(&flash, &c).image_state, image_state::UNSIGNED);
+    let s = signed(&image(UNIT, 6), &station);
     let mut region = vec![0xFFu8; 64 * 1024];
-    let bare = image(UNIT, 6);
-    region[..bare.len()].copy_from_slice(&bare);
-    let choice = choose_mapped(&QEMU_LAYOUT, &region, |b| production(&public).check(b));
-    assert_eq!((choice.source, choice.refused), (Source::None, Some(Reason::Unsigned)));
-    let r = report(&choice, UNIT, &[], &[], false);
-    assert_eq!(r.image_state, image_state::UNSIGNED);
-    let s = signed(&bare, &station);
     region[..s.len()].copy_from_slice(&s);
-    let choice = choose_mapped(&QEMU_LAYOUT, &region, |b| production(&public).check(b));
-    assert_eq!(choice.source, Source::Probe);
+    let c = choose(&mut crate::slots::Mapped(&region), &QEMU_LAYOUT, |b| {
+        trust.check(b)
+    });
+    assert_eq!(c.source, Source::Probe);
 }

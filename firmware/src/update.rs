@@ -84,6 +84,7 @@ impl UpdateTask {
                 u16::from(state) << 8 | u16::from(reason as u8),
                 Ordering::Relaxed,
             );
+            REPORT_DUE.store(true, Ordering::Release);
         }
         answer.packet().encode(reply)
     }

@@ -142,7 +142,10 @@ mod facts {
     /// `tcomp`'s table of targets (help texts) is the firmware's: memory maps and slot layouts.
     #[test]
     fn the_tools_targets_are_the_firmwares() {
-        assert_eq!(models_origin(&read("memory.x")), QEMU_MPS2_AN386.models_at);
+        assert_eq!(
+            models_origin(&read("boards/qemu/memory.x")),
+            QEMU_MPS2_AN386.models_at
+        );
         assert_eq!(
             models_origin(&read("boards/stm32f4/memory.x")),
             STM32F407.models_at

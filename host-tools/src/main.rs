@@ -10,10 +10,7 @@
 //! by its reader (`tcomp … | head`) ends the run quietly with 0; any other failure to write it is an
 //! error.
 
-mod calibrate;
-mod cmd;
-mod demo;
-mod render;
+use tcomp::cmd;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

@@ -108,8 +108,11 @@ pub mod status {
     pub const OVERRUN: u16 = 1 << 15;
     /// The board booted after a watchdog reset: set on the first frame after that boot (board bit).
     pub const WATCHDOG_RESET: u16 = 1 << 14;
+    /// The first frame after a boot (board bit): the feature filters start from nothing, and its
+    /// counts cover the interval since the counters were last read, not one known period.
+    pub const FIRST_SAMPLE: u16 = 1 << 13;
     /// Every named bit with its name, lowest bit first.
-    pub const NAMES: [(u16, &str); 10] = [
+    pub const NAMES: [(u16, &str); 11] = [
         (NO_MODEL, "no-model"),
         (OUT_OF_RANGE, "out-of-range"),
         (INPUT_FAULT, "input-fault"),
@@ -118,6 +121,7 @@ pub mod status {
         (MODEL_FAULT, "model-fault"),
         (TEMP_JUMP, "temperature-jump"),
         (TIME_JUMP, "time-jump"),
+        (FIRST_SAMPLE, "first-sample"),
         (WATCHDOG_RESET, "watchdog-reset"),
         (OVERRUN, "overrun"),
     ];

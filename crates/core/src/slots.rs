@@ -17,9 +17,22 @@
 //! 12      4     CRC-32 of the payload (the core's `crc32`)
 //! 16      4     CRC-32 of bytes 0..16 (the header above)
 //! 20      4     commit word: erased (0xFFFF_FFFF) until the payload is verified, then COMMIT
-//! 24      8     reserved (erased)
+//! 24      4     trial word: erased until the first boot that runs the slot, then TRIAL
+//! 28      4     confirm word: erased until that boot has run correctly, then CONFIRM
 //! 32      len   payload: the model image, opaque here, checked by the caller's validator
 //! ```
+//!
+//! # Trial boot, confirm, rollback (what [`boot`] does, before the watchdog starts)
+//! A newly committed slot is not trusted yet: the first boot that runs it programs its trial word
+//! and keeps the other slot — the last confirmed image — untouched. Once that boot has run
+//! correctly the firmware programs the confirm word ([`confirm`]). A later boot that finds the
+//! trial word set but no confirm word knows the trial ended without proving the image (a reset,
+//! a power cut, a crash, the firmware's own rollback request): [`select`] skips such a slot, so the
+//! unit runs the old image again, and the boot erases the failed one. The boot erases the slot an
+//! update will write only once the running slot is confirmed (or there is none), so the old image
+//! stays recoverable until the new one is confirmed, and nothing is ever erased while the loop
+//! runs. Every step is one word program or one sector erase at boot: `tests/power_cut.rs` cuts each
+//! of them as it cuts the update's.
 //!
 //! # Why the commit word cannot lie
 //! NOR flash programs by clearing bits. An interrupted program of the commit word leaves a value
@@ -37,7 +50,7 @@
 pub mod sim;
 pub mod writer;
 
-use embedded_storage::nor_flash::ReadNorFlash;
+use embedded_storage::nor_flash::{NorFlash, ReadNorFlash};
 
 pub use writer::SlotWriter;
 
@@ -49,6 +62,15 @@ pub const COMMIT: u32 = 0x3C5A_A5C3;
 pub const ERASED: u32 = 0xFFFF_FFFF;
 /// Offset of the commit word in the slot.
 pub const COMMIT_AT: u32 = 20;
+/// Offset of the trial word.
+pub const TRIAL_AT: u32 = 24;
+/// The trial word's programmed value. Any bit of it cleared counts: a torn program of it still
+/// says a boot began to run the slot.
+pub const TRIAL: u32 = 0x5AA5_3CC3;
+/// Offset of the confirm word.
+pub const CONFIRM_AT: u32 = 28;
+/// The confirm word's value: only this exact value confirms (a torn program does not).
+pub const CONFIRM: u32 = 0xC33C_A55A;
 /// Offset of the payload in the slot.
 pub const PAYLOAD_AT: u32 = 32;
 /// Bytes of the header covered by its CRC.
@@ -220,6 +242,41 @@ pub struct Active {
     pub header: Header,
 }
 
+/// How far a committed slot has proven itself.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Trial {
+    /// Committed, never booted (trial and confirm words erased).
+    Fresh,
+    /// A boot began to run it (trial word programmed, even partly) and it is not confirmed: that
+    /// boot is running it now, or it ended without proving it.
+    Running,
+    /// Confirmed by a boot that ran it correctly.
+    Confirmed,
+}
+
+/// Reads a slot's trial state from its trial and confirm words.
+pub fn trial<F: ReadNorFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    slot: SlotId,
+) -> Result<Trial, F::Error> {
+    let mut words = [0u8; 8];
+    flash.read(layout.base(slot) + TRIAL_AT, &mut words)?;
+    let word = |i: usize| {
+        let mut w = [0u8; 4];
+        if let Some(b) = words.get(4 * i..4 * i + 4) {
+            w.copy_from_slice(b);
+        }
+        u32::from_le_bytes(w)
+    };
+    Ok(match (word(0), word(1)) {
+        (_, CONFIRM) => Trial::Confirmed,
+        (ERASED, ERASED) => Trial::Fresh,
+        _ => Trial::Running,
+    })
+}
+
 impl Active {
     /// Offset of its payload in the flash.
     pub const fn payload(&self, layout: &Layout) -> u32 {
@@ -237,6 +294,8 @@ pub enum SlotState {
     Uncommitted(Header),
     /// Committed, but the payload CRC or the validator fails (or it does not fit the slot).
     Corrupt(Header),
+    /// Committed, run by a boot that never confirmed it: rolled back from.
+    FailedTrial(Header),
     /// Committed and valid.
     Valid(Header),
 }
@@ -256,6 +315,10 @@ pub fn inspect<F: ReadNorFlash>(
     };
     if commit != COMMIT {
         return Ok(SlotState::Uncommitted(header));
+    }
+    if trial(flash, layout, slot)? == Trial::Running {
+        // A boot began to run it and never confirmed it: its trial failed (see [`boot`]).
+        return Ok(SlotState::FailedTrial(header));
     }
     if header.length > layout.capacity()
         || flash_crc(flash, base + PAYLOAD_AT, header.length)? != header.payload_crc
@@ -291,4 +354,86 @@ pub fn select<F: ReadNorFlash>(
         }),
         _ => None,
     })
+}
+
+/// What the boot found and did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BootSlots {
+    /// The slot to run, if any.
+    pub active: Option<Active>,
+    /// It runs on trial: a boot that ends before [`confirm`] rolls it back.
+    pub trial: bool,
+    /// A slot whose trial failed was found (and is erased now unless the run needs it).
+    pub rolled_back: bool,
+    /// The slot an update writes was erased.
+    pub erased: bool,
+}
+
+/// The boot, before the watchdog starts: selects the slot to run ([`select`]); a freshly committed
+/// one gets its trial word (this boot is its trial); then the slot an update will write is erased
+/// if it is not blank — but only when the running slot is confirmed, or there is none, so the old
+/// image survives a trial. `external` names a slot holding an image the caller runs without a
+/// header (a probe's bare image at slot A) when no committed slot is selected: it is kept too.
+pub fn boot<F: NorFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    external: Option<SlotId>,
+    mut validate: impl FnMut(&mut F, u32, u32) -> bool,
+) -> Result<BootSlots, F::Error> {
+    let a = inspect(flash, layout, SlotId::A, &mut validate)?;
+    let b = inspect(flash, layout, SlotId::B, &mut validate)?;
+    let rolled_back =
+        matches!(a, SlotState::FailedTrial(_)) || matches!(b, SlotState::FailedTrial(_));
+    let active = select(flash, layout, &mut validate)?;
+    let mut trial_run = false;
+    if let Some(act) = active {
+        match trial(flash, layout, act.slot)? {
+            Trial::Fresh => {
+                flash.write(layout.base(act.slot) + TRIAL_AT, &TRIAL.to_le_bytes())?;
+                trial_run = true;
+            }
+            Trial::Running => trial_run = true,
+            Trial::Confirmed => {}
+        }
+    }
+    let external = if active.is_none() { external } else { None };
+    let keep = active.map(|a| a.slot).or(external);
+    let target = keep.map_or(SlotId::A, SlotId::other);
+    let mut erased = false;
+    if !trial_run {
+        let from = layout.base(target);
+        if !blank(flash, from, layout.size)? {
+            flash.erase(from, from + layout.size)?;
+            erased = true;
+        }
+    }
+    Ok(BootSlots {
+        active,
+        trial: trial_run,
+        rolled_back,
+        erased,
+    })
+}
+
+/// Confirms the running slot: its trial boot has run correctly. One word program; call it from
+/// the running firmware (it never erases).
+pub fn confirm<F: NorFlash>(flash: &mut F, layout: &Layout, slot: SlotId) -> Result<(), F::Error> {
+    flash.write(layout.base(slot) + CONFIRM_AT, &CONFIRM.to_le_bytes())
+}
+
+/// Whether `len` bytes of flash from `offset` read erased, read [`CHUNK`] bytes at a time.
+fn blank<F: ReadNorFlash>(flash: &mut F, offset: u32, len: u32) -> Result<bool, F::Error> {
+    let mut buf = [0u8; CHUNK];
+    let mut done = 0u32;
+    while done < len {
+        let n = (len - done).min(CHUNK as u32);
+        let chunk = buf.get_mut(..n as usize).unwrap_or(&mut []);
+        flash.read(offset + done, chunk)?;
+        if chunk.iter().any(|&b| b != 0xFF) {
+            return Ok(false);
+        }
+        done += n;
+    }
+    Ok(true)
 }

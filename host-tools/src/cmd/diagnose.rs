@@ -226,7 +226,7 @@ fn run_rounds(args: &Args) -> anyhow::Result<()> {
 
 /// The diagnosis in the shared vocabulary: each candidate's held-out change as `change_pct`
 /// (negative when the residual fell) beside the analysis' `improvement_pct`.
-fn body(d: &tcomp_discover::Diagnosis) -> anyhow::Result<serde_json::Value> {
+pub fn body(d: &tcomp_discover::Diagnosis) -> anyhow::Result<serde_json::Value> {
     let mut v = serde_json::to_value(d)?;
     if let Some(cands) = v.get_mut("candidates").and_then(|c| c.as_array_mut()) {
         for (c, s) in cands.iter_mut().zip(&d.candidates) {

@@ -51,7 +51,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 }
 
 /// The blob's `--json` document.
-fn blob_json(args: &Args, bytes: &[u8], m: &HostModel<'_>) -> serde_json::Value {
+pub fn blob_json(args: &Args, bytes: &[u8], m: &HostModel<'_>) -> serde_json::Value {
     let nf = m.n_features();
     let centers: Vec<_> = m
         .rbf

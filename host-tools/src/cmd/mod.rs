@@ -35,7 +35,7 @@ pub mod output;
 pub mod printable;
 pub mod progress;
 pub mod report;
-mod run;
+pub mod run;
 pub mod simulate;
 mod simulate_units;
 pub mod stdout;

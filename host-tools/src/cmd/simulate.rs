@@ -64,6 +64,20 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if args.list {
         return list(args.json);
     }
+    let Some((truth, out)) = write(args)? else {
+        return Ok(());
+    };
+    if args.json {
+        return print_json(&truth, out);
+    }
+    print_text(&truth, out);
+    Ok(())
+}
+
+/// The command's work without its summary (also what the Python binding's `simulate` runs):
+/// checks every option and the scenario, then writes the runs; the truth and the directory, or
+/// `None` for `--units` (which reports its units itself unless `--quiet`).
+pub fn write(args: &Args) -> anyhow::Result<Option<(tcomp_sim::TruthFile, &std::path::Path)>> {
     let Some(out) = &args.out else {
         bail!("--out DIR is required");
     };
@@ -97,16 +111,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 outln!("  outlier {}: {}", p.unit, p.kind);
             }
         }
-        return Ok(());
+        return Ok(None);
     }
     let mut progress = super::progress::Bar::new(args.quiet);
     let truth = tcomp_sim::write_preset_with_progress(&preset, out, args.gzip, &mut progress)?;
     progress.clear();
-    if args.json {
-        return print_json(&truth, out);
-    }
-    print_text(&truth, out);
-    Ok(())
+    Ok(Some((truth, out.as_path())))
 }
 
 /// A scenario error about the rate or the step, named by the flag that set it.

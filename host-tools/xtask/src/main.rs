@@ -1,12 +1,16 @@
 //! `cargo xtask`: the one entry point a person and CI both run.
 //!
-//! * `cargo xtask ci`   — fmt, clippy (host and thumbv7em, `-D warnings`), host tests, the no_std
-//!   build of the core, the STM32F407 board binary with its size budgets (`board.rs`), and the
-//!   QEMU smoke run with its instruction budget.
-//! * `cargo xtask board` — only the board binary's build, clippy and sizes.
+//! * `cargo xtask ci`   — fmt, clippy (host and thumbv7em, both boards, `-D warnings`), host tests,
+//!   the no_std build of the core, the STM32F407 board binary with its size budgets (`board.rs`),
+//!   the QEMU smoke run with its instruction budget, and the QEMU product run (`qemu.rs`).
+//! * `cargo xtask board` — only the board binary's build and sizes.
 //! * `cargo xtask smoke` — only the QEMU smoke run.
 //! * `cargo xtask power-cut` — the model slots' power-loss test (a power cut after and inside every
 //!   write step of three updates); prints its `POWER-CUT` line.
+//! * `cargo xtask ffi`   — the C API's examples: a host C program against `tcomp eval`, a
+//!   bare-metal C program under QEMU against the host, bit for bit (see `ffi/mod.rs`).
+//! * `cargo xtask python` — the Python wheel built, installed into a fresh virtual environment,
+//!   and its pytest suite run (see `python.rs`).
 //! * `cargo xtask qemu`  — the QEMU replay of the 200 Hz loop with bit-exact host parity, fault
 //!   checks and budgets (see `qemu.rs`), and a model update over the emulated UART with
 //!   `tcomp flash` (`update.rs`).
@@ -14,7 +18,9 @@
 mod board;
 mod defmt;
 mod elf;
+mod ffi;
 mod proc;
+mod python;
 mod qemu;
 mod update;
 
@@ -35,21 +41,22 @@ fn main() -> Result<()> {
         "qemu" => qemu::qemu(),
         "board" => board::board(),
         "power-cut" => power_cut(),
-        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board|power-cut>"),
+        "ffi" => ffi::ffi(),
+        "python" => python::python(),
+        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board|power-cut|ffi|python>"),
     }
 }
 
 /// The longest a cargo command of the xtask may take: the workspace's test build from nothing
 /// takes about 10 min on the 2-core machine while other builds run; CI's own limit is 90 min.
 const CARGO_LIMIT: Duration = proc::minutes(40);
-/// The host test set: the workspace less the firmware crates (their library's tests run apart,
-/// the boards are target-only).
+/// The host test set: the workspace less the board crates (target-only binaries).
 pub const HOST_TESTS: [&str; 5] = [
     "--workspace",
     "--exclude",
-    "tcomp-firmware",
+    board::PACKAGE,
     "--exclude",
-    "tcomp-board-stm32f4",
+    qemu::QEMU_BOARD,
 ];
 /// The QEMU smoke run: about 1 s.
 const SMOKE_LIMIT: Duration = proc::minutes(2);
@@ -93,20 +100,18 @@ impl Drop for Steps {
 fn ci() -> Result<()> {
     let mut steps = Steps(Vec::new());
     steps.run("fmt", || cargo(&["fmt", "--all", "--", "--check"]))?;
+    // The host crates, the firmware's application library with them (its tests run on the host).
     steps.run("clippy_host", || {
-        cargo(&[
-            "clippy",
-            "--workspace",
-            "--exclude",
-            "tcomp-firmware",
-            "--exclude",
-            "tcomp-board-stm32f4",
-            "--all-targets",
-            "--",
-            "-D",
-            "warnings",
-        ])
+        cargo(
+            &[
+                &["clippy"][..],
+                &HOST_TESTS,
+                &["--all-targets", "--", "-D", "warnings"],
+            ]
+            .concat(),
+        )
     })?;
+    // Everything that runs on the target, both boards' binaries with it.
     steps.run("clippy_target", || {
         cargo(&[
             "clippy",
@@ -116,6 +121,10 @@ fn ci() -> Result<()> {
             "tcomp-hal",
             "-p",
             "tcomp-firmware",
+            "-p",
+            qemu::QEMU_BOARD,
+            "-p",
+            board::PACKAGE,
             "--target",
             TARGET,
             "--",
@@ -123,15 +132,7 @@ fn ci() -> Result<()> {
             "warnings",
         ])
     })?;
-    // The firmware's library (the loop) has host tests; its binaries are target-only.
-    let firmware_lib = ["-p", "tcomp-firmware", "--lib", "--tests"];
-    steps.run("clippy_firmware_lib", || {
-        cargo(&[&["clippy"][..], &firmware_lib, &["--", "-D", "warnings"]].concat())
-    })?;
     steps.run("test", || cargo(&[&["test"][..], &HOST_TESTS].concat()))?;
-    steps.run("test_firmware_lib", || {
-        cargo(&["test", "-p", "tcomp-firmware", "--lib"])
-    })?;
     steps.run("power_cut", power_cut)?;
     steps.run("no_std_core_hal", || {
         cargo(&[
@@ -147,7 +148,9 @@ fn ci() -> Result<()> {
     })?;
     steps.run("board", board::board)?;
     steps.run("smoke", smoke)?;
-    steps.run("qemu", qemu::qemu)
+    steps.run("qemu", qemu::qemu)?;
+    steps.run("ffi", ffi::ffi)?;
+    steps.run("python", python::python)
 }
 
 /// Runs the smoke binary under QEMU (with the runner's arguments of `.cargo/config.toml`, bounded
@@ -157,7 +160,7 @@ fn smoke() -> Result<()> {
     cargo(&[
         "build",
         "-p",
-        "tcomp-firmware",
+        qemu::QEMU_BOARD,
         "--target",
         TARGET,
         "--release",

@@ -112,6 +112,16 @@ pub struct Summary {
     pub resets: u64,
     /// Stack peak, bytes.
     pub stack: u64,
+    /// The worst whole sample task (entry to the watchdog feed), instructions.
+    pub task_max: u64,
+    /// Sample periods that began while the drain, or the update task, ran.
+    pub drain_preempted: u64,
+    /// See `drain_preempted`.
+    pub update_preempted: u64,
+    /// Frames the queue dropped whole, and received bytes the ring lost.
+    pub dropped: u64,
+    /// See `dropped`.
+    pub rx_lost: u64,
 }
 
 /// The firmware's summary numbers of one run, checked against the host's hash.
@@ -145,6 +155,11 @@ pub fn check(text: &str, host_hash: u32, samples: usize) -> Result<Summary> {
         missed: get("missed=")?,
         resets: get("watchdog_resets=")?,
         stack: get("stack_bytes=")?,
+        task_max: get("task_max=")?,
+        drain_preempted: get("drain_preempted=")?,
+        update_preempted: get("update_preempted=")?,
+        dropped: get("dropped_frames=")?,
+        rx_lost: get("rx_lost=")?,
     })
 }
 

@@ -234,7 +234,8 @@ pub fn build<const K: usize>(
         }
         let mut board = v.board();
         let mut check = TimeCheck::new(TICKS_PER_PERIOD);
-        let mut boot_flags = 0;
+        // The first frame of every boot is flagged (the board's bit).
+        let mut boot_flags = status::FIRST_SAMPLE;
         let mut outputs = Vec::with_capacity(v.samples);
         let mut frames = Vec::with_capacity(v.samples);
         let mut statuses = Vec::with_capacity(v.samples);
@@ -277,7 +278,13 @@ pub fn build<const K: usize>(
             let len = frame
                 .encode(&mut buf)
                 .map_err(|e| anyhow::anyhow!("frame: {e}"))?;
-            frames.push(buf[..len].to_vec());
+            // A sample task that hangs never returns: its frame is queued but the drain, below
+            // it, never sends it before the watchdog resets the board.
+            frames.push(if injected & HANG != 0 {
+                Vec::new()
+            } else {
+                buf[..len].to_vec()
+            });
             late = injected & (STALL | MISS) != 0;
             skip = injected & MISS != 0;
             if injected & HANG != 0 {
@@ -285,7 +292,7 @@ pub fn build<const K: usize>(
                 let _ = app.load(image);
                 board = v.board_at(n + 1);
                 check = TimeCheck::new(TICKS_PER_PERIOD);
-                boot_flags = status::WATCHDOG_RESET;
+                boot_flags = status::WATCHDOG_RESET | status::FIRST_SAMPLE;
             }
         }
         (outputs, frames, statuses, served)

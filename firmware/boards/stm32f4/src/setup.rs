@@ -7,9 +7,9 @@
 //! | sample timer | TIM2 (32-bit) | — | 1 MHz tick, update every 5,000 ticks (200 Hz) |
 //! | thermometers | SPI1, 12 × ADS1220 | SCK PA5, MISO PA6, MOSI PA7; CS PE0–PE11; DRDY PD0–PD11 (inputs: each conversion read once, when ready) | mode 1, ≤ 5 MHz |
 //! | counter block | SPI2, FPGA | SCK PB13, MISO PB14, MOSI PB15, CS PB12 | mode 0, ≤ 10 MHz |
-//! | frames out | USART1 TX | PA9 | 921,600 baud 8N1 (the description's `[link] baud`) |
-//! | model updates in | USART1 RX | PA10 | same link: `tcomp flash` (framed protocol, replies between frames) |
-//! | watchdog | IWDG | — | 50 ms (ten periods) |
+//! | frames out | USART1 TX | PA9 | [`BAUD`] (921,600, the description's `[link] baud`) 8N1, TXE interrupt (the application's drain) |
+//! | model updates in | USART1 RX, DMA2 stream 2 channel 4 | PA10 | same link: `tcomp flash`; circular DMA into a 2 KiB ring (half/full-transfer interrupts) |
+//! | watchdog | IWDG | — | 50 ms (ten periods), started by the application after the boot's erase |
 //!
 //! Thermometers 0–8 are the RLGs' (anode, cathode, shell of x, y, z), 9–11 the QMAs', as
 //! `tcomp_firmware::app::IMU6` expects; counter-block channels 0–2 the RLGs, 3–5 the QMAs.
@@ -19,14 +19,14 @@
 use embedded_hal::spi::{MODE_0, MODE_1};
 use embedded_hal_bus::spi::{AtomicDevice, ExclusiveDevice, NoDelay};
 use embedded_hal_bus::util::AtomicCell;
-use stm32f4xx_hal::flash::LockedFlash;
+use stm32f4xx_hal::dma::{StreamsTuple, Transfer, config::DmaConfig};
 use stm32f4xx_hal::gpio::{AnyPin, Input, Output, PB12};
 use stm32f4xx_hal::pac::{self, SPI1, SPI2, TIM2, USART1};
 use stm32f4xx_hal::prelude::*;
 use stm32f4xx_hal::rcc::Config;
-use stm32f4xx_hal::serial::{self, Rx, RxListen, Tx};
+use stm32f4xx_hal::serial::{self, Tx};
 use stm32f4xx_hal::spi::Spi;
-use stm32f4xx_hal::timer::{CounterUs, Event};
+use stm32f4xx_hal::timer::CounterUs;
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
 use tcomp_hal::OnReady;
 use tcomp_hal::ads1220::{Ads1220, Config as AdcConfig, Gain, IdacCurrent, RtdThermometer};
@@ -50,7 +50,8 @@ pub const THERMOMETERS: usize = 12;
 /// Counter-block channels used.
 pub const COUNTERS: usize = 6;
 /// UART baud rate: the board description's `[link] baud` (`build.rs`, `tcomp_firmware::wiring`),
-/// the rate `tcomp flash --board` opens the port at.
+/// the one place it is set: USART1 runs at it, the receive ring is sized from it, and
+/// `tcomp flash --board` opens the port at it.
 pub const BAUD: u32 = crate::LINK_BAUD;
 /// Watchdog timeout.
 pub const WATCHDOG_MS: u32 = 50;
@@ -72,8 +73,19 @@ pub type Counters = CounterBlock<ExclusiveDevice<Spi<SPI2>, PB12<Output>, NoDela
 pub type SampleTimer = CounterUs<TIM2>;
 /// The frame output.
 pub type FrameTx = Tx<USART1>;
-/// The model update's input (USART1 RX, PA10).
-pub type UpdateRx = Rx<USART1>;
+/// The model update's input: USART1 RX (PA10) by DMA2 stream 2 into a ring of [`RX_RING`] bytes.
+pub type RxDma = Transfer<
+    stm32f4xx_hal::dma::Stream2<pac::DMA2>,
+    4,
+    serial::Rx<USART1>,
+    stm32f4xx_hal::dma::PeripheralToMemory,
+    &'static mut [u8; RX_RING],
+>;
+/// Bytes of the receive ring: sized from the baud rate and the watchdog policy. At [`BAUD`] the
+/// line carries 92,160 bytes a second; the update task reads the ring at least every period
+/// (5 ms, 461 bytes) and is never held off for more than the policy's 20 ms without the unit
+/// being reset (`application::liveness`), 1,843 bytes: 2 KiB holds that.
+pub const RX_RING: usize = 2048;
 
 /// Everything the application uses, configured.
 pub struct Devices {
@@ -81,16 +93,17 @@ pub struct Devices {
     pub thermometers: [Thermometer; THERMOMETERS],
     /// The counter block.
     pub counters: Counters,
-    /// The sample timer, running, update interrupt enabled.
+    /// The sample timer, not started (the application starts it with the watchdog).
     pub timer: SampleTimer,
     /// The frame output.
     pub tx: FrameTx,
-    /// The independent watchdog, not started yet (`init` starts it, after the boot's slot erase).
+    /// The independent watchdog, not started yet (the application starts it, after the boot's
+    /// slot erase and the model load).
     pub watchdog: IndependentWatchdog,
-    /// The update input.
-    pub rx: UpdateRx,
-    /// The part's flash, for the update task.
-    pub flash: LockedFlash,
+    /// The update input: the circular DMA, running, and its ring.
+    pub rx: (RxDma, *const u8),
+    /// The model slots' flash.
+    pub flash: crate::flash::ModelFlash,
     /// Why the chip last reset.
     pub reset_cause: ResetCause,
     /// The fault the previous run recorded, if any.
@@ -102,8 +115,8 @@ pub struct Devices {
 pub enum SetupError {
     /// The UART rejected its configuration.
     Uart,
-    /// The sample timer rejected its period.
-    Timer,
+    /// The receive ring's static was taken twice.
+    Ring,
 }
 
 /// Configures the board. `spi1` is the static home of the thermometers' shared bus.
@@ -187,25 +200,45 @@ pub fn setup(
         ),
     }
 
-    // USART1: frames out, and model updates in (`tcomp flash`), RXNE interrupt on.
-    let (tx, mut rx) = dp
+    // USART1: frames out (TXE interrupt, the application's drain), and model updates in
+    // (`tcomp flash`) by DMA: DMA2 stream 2, channel 4, circular over the ring, half- and
+    // full-transfer interrupts (the `receive` task counts them).
+    let (tx, rx) = dp
         .USART1
         .serial(
             (gpioa.pa9, gpioa.pa10),
-            serial::Config::default().baudrate(BAUD.bps()),
+            serial::Config::default()
+                .baudrate(BAUD.bps())
+                .dma(serial::config::DmaConfig::Rx),
             &mut rcc,
         )
         .map_err(|_| SetupError::Uart)?
         .split();
-    rx.listen();
+    let ring: &'static mut [u8; RX_RING] =
+        cortex_m::singleton!(: [u8; RX_RING] = [0; RX_RING]).ok_or(SetupError::Ring)?;
+    let ring_ptr = ring.as_ptr();
+    let streams = StreamsTuple::new(dp.DMA2, &mut rcc);
+    let mut rx_dma = Transfer::init_peripheral_to_memory(
+        streams.2,
+        rx,
+        ring,
+        None,
+        DmaConfig::default()
+            .memory_increment(true)
+            .half_transfer_interrupt(true)
+            .transfer_complete_interrupt(true),
+    );
+    // SAFETY: the stream is configured and not enabled yet; circular mode only makes it wrap to
+    // the ring's start instead of stopping (the HAL's config has no switch for it).
+    unsafe {
+        use stm32f4xx_hal::dma::traits::Stream as _;
+        rx_dma.stream().set_circular_mode(true);
+    }
+    rx_dma.start(|_| {});
 
-    let mut timer = dp.TIM2.counter_us(&mut rcc);
-    timer
-        .start(TICKS_PER_PERIOD.micros())
-        .map_err(|_| SetupError::Timer)?;
-    timer.listen(Event::Update);
-
-    // Started by `init` once the inactive model slot is erased (an erase takes 1–2 s).
+    // Started by the application with its watchdog, after the models are loaded.
+    let timer = dp.TIM2.counter_us(&mut rcc);
+    // Started by the application once the inactive model slot is erased (an erase takes 1–2 s).
     let watchdog = IndependentWatchdog::new(dp.IWDG);
 
     Ok(Devices {
@@ -214,8 +247,8 @@ pub fn setup(
         timer,
         tx,
         watchdog,
-        rx,
-        flash: LockedFlash::new(dp.FLASH),
+        rx: (rx_dma, ring_ptr),
+        flash: crate::flash::ModelFlash::new(dp.FLASH),
         reset_cause,
         fault,
     })

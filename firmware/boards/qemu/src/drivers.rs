@@ -1,7 +1,7 @@
-//! The QEMU mps2-an386 board layer: the few CMSDK peripherals the replay binary drives, by their
+//! The QEMU mps2-an386 board's drivers: the few CMSDK peripherals the application drives, by their
 //! registers (there is no PAC for this board), plus the SysTick instruction counter and the
-//! semihosting exit. Everything else — the loop, the frames, the time-base check, the fault record —
-//! is the library's and shared with the STM32F407 board.
+//! semihosting exit. Everything else — the tasks, the loop, the frames, the time-base check, the
+//! fault record — is the firmware library's and shared with the STM32F407 board.
 //!
 //! The `MODELS` region's RAM gets NOR flash semantics ([`RamFlash`]) for the model slots' update.
 //!
@@ -11,18 +11,30 @@
 //! at `0x4000_8000` whose interrupt is the NMI and whose second expiry resets the system (QEMU
 //! restarts the guest unless `-no-reboot` is given; RAM outside the loaded images survives).
 
+use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::SYST;
 use cortex_m::peripheral::syst::SystClkSource;
 use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
+use tcomp_firmware::application::SerialTx;
+use tcomp_firmware::slots::MappedFlash;
 
 /// Instructions per SysTick tick on mps2-an386 under `-icount shift=0` (1 GHz virtual / 25 MHz).
 pub const INSTRUCTIONS_PER_TICK: u32 = 40;
 /// The board's peripheral clock.
 pub const SYSCLK_HZ: u32 = 25_000_000;
-/// IRQ number of CMSDK timer 0 (the sample timer).
-pub const TIMER0_IRQ: i16 = 8;
-/// IRQ number of UART 0's receive interrupt.
-pub const UART0_RX_IRQ: i16 = 0;
+
+/// Received bytes the receive ring had no room for.
+static RX_LOST: AtomicU32 = AtomicU32::new(0);
+
+/// Counts a received byte the ring had no room for.
+pub fn count_rx_lost() {
+    RX_LOST.fetch_add(1, Ordering::Relaxed);
+}
+
+/// Received bytes the ring had no room for, so far.
+pub fn rx_lost() -> u32 {
+    RX_LOST.load(Ordering::Relaxed)
+}
 
 fn write(addr: usize, value: u32) {
     // SAFETY: `addr` is a register of a CMSDK peripheral of this board (the constants below), which
@@ -126,7 +138,7 @@ impl Uart {
     const CTRL_RX_IRQ_ENABLE: u32 = 1 << 3;
     const INT_RX: u32 = 1 << 1;
 
-    /// UART 0 with its transmitter and receiver enabled.
+    /// UART 0 with its transmitter and receiver enabled (no interrupts yet).
     pub fn uart0() -> Self {
         let u = Self::handle0();
         // 25 MHz / 217 ≈ 115,200 Bd on the real board; QEMU needs a divider of at least 16.
@@ -138,13 +150,13 @@ impl Uart {
         u
     }
 
-    /// UART 0 as configured by [`Uart::uart0`], without touching its registers: a second handle
-    /// for the update task (receive, and replies sent inside a critical section).
+    /// UART 0 as configured by [`Uart::uart0`], without touching its registers: the receive
+    /// interrupt's handle.
     pub const fn handle0() -> Self {
         Self { base: 0x4000_4000 }
     }
 
-    /// Raises [`UART0_RX_IRQ`] for every received byte (until cleared).
+    /// Raises UART 0's receive interrupt for every received byte (until cleared).
     pub fn enable_rx_interrupt(&self) {
         let ctrl = read(self.base + Self::CTRL);
         write(self.base + Self::CTRL, ctrl | Self::CTRL_RX_IRQ_ENABLE);
@@ -162,13 +174,44 @@ impl Uart {
         }
         Some(read(self.base + Self::DATA) as u8)
     }
+}
 
-    /// Sends `bytes`, waiting for room before each.
-    pub fn write_all(&self, bytes: &[u8]) {
-        for &b in bytes {
-            while read(self.base + Self::STATE) & Self::STATE_TX_FULL != 0 {}
-            write(self.base + Self::DATA, u32::from(b));
-        }
+/// UART 0's transmitter, as the application's drain writes it: a byte whenever its one-byte buffer
+/// is free, the transmit interrupt (IRQ 1) on while bytes wait.
+pub struct UartTx {
+    base: usize,
+}
+
+impl UartTx {
+    const CTRL_TX_IRQ_ENABLE: u32 = 1 << 2;
+    const INT_TX: u32 = 1;
+
+    /// UART 0's transmitter (configured by [`Uart::uart0`]).
+    pub const fn uart0() -> Self {
+        Self { base: 0x4000_4000 }
+    }
+}
+
+impl SerialTx for UartTx {
+    fn ready(&mut self) -> bool {
+        read(self.base + Uart::STATE) & Uart::STATE_TX_FULL == 0
+    }
+
+    fn write(&mut self, byte: u8) {
+        write(self.base + Uart::DATA, u32::from(byte));
+    }
+
+    fn listen(&mut self, on: bool) {
+        // Acknowledge the "byte sent" interrupt first: with the interrupt on, the next byte sent
+        // raises it again.
+        write(self.base + Uart::INTCLEAR, Self::INT_TX);
+        let ctrl = read(self.base + Uart::CTRL);
+        let ctrl = if on {
+            ctrl | Self::CTRL_TX_IRQ_ENABLE
+        } else {
+            ctrl & !Self::CTRL_TX_IRQ_ENABLE
+        };
+        write(self.base + Uart::CTRL, ctrl);
     }
 }
 
@@ -197,17 +240,24 @@ impl RamFlash {
         }
     }
 
-    /// The bytes `[offset, offset + len)`, as the CPU reads them; `None` outside the region.
-    pub fn bytes(&self, offset: u32, len: u32) -> Option<&[u8]> {
-        let end = (offset as usize).checked_add(len as usize)?;
-        if end > self.len {
-            return None;
+    /// The bytes `[offset, offset + len)` for the rest of the run: the loop's models borrow the
+    /// active slot's payload this way. Empty outside the region.
+    ///
+    /// # Safety
+    /// Nothing may erase or program the range for the rest of the run (the active slot's payload:
+    /// an update writes only the other slot).
+    pub unsafe fn map_static(&self, offset: u32, len: u32) -> &'static [u8] {
+        match (offset as usize).checked_add(len as usize) {
+            // SAFETY: inside the region, which `new`'s contract keeps mapped; the caller's
+            // contract keeps it unwritten.
+            Some(end) if end <= self.len => unsafe {
+                core::slice::from_raw_parts(
+                    (self.base + offset as usize) as *const u8,
+                    len as usize,
+                )
+            },
+            _ => &[],
         }
-        // SAFETY: inside the region (checked), which `new`'s contract keeps mapped; the slice
-        // borrows `self`, so no erase or program (`&mut self`) happens while it lives.
-        Some(unsafe {
-            core::slice::from_raw_parts((self.base + offset as usize) as *const u8, len as usize)
-        })
     }
 
     fn check(&self, offset: u32, len: usize, align: usize) -> Result<usize, NorFlashErrorKind> {
@@ -219,6 +269,20 @@ impl RamFlash {
             Some(end) if end <= self.len => Ok(self.base + at),
             _ => Err(NorFlashErrorKind::OutOfBounds),
         }
+    }
+}
+
+impl MappedFlash for RamFlash {
+    fn mapped(&self, offset: u32, len: u32) -> Option<&[u8]> {
+        let end = (offset as usize).checked_add(len as usize)?;
+        if end > self.len {
+            return None;
+        }
+        // SAFETY: inside the region (checked), which `new`'s contract keeps mapped; the slice
+        // borrows `self`, so no erase or program (`&mut self`) happens while it lives.
+        Some(unsafe {
+            core::slice::from_raw_parts((self.base + offset as usize) as *const u8, len as usize)
+        })
     }
 }
 
@@ -310,11 +374,12 @@ impl Watchdog {
         write(self.base + Self::LOCK, 0);
     }
 
-    /// Stops it (at the end of the run).
-    pub fn stop(&self) {
-        write(self.base + Self::LOCK, Self::UNLOCK);
-        write(self.base + Self::CONTROL, 0);
-        write(self.base + Self::LOCK, 0);
+    /// Stops it (at the end of the run), whoever holds its handle.
+    pub fn stop_any() {
+        let base = 0x4000_8000;
+        write(base + Self::LOCK, Self::UNLOCK);
+        write(base + Self::CONTROL, 0);
+        write(base + Self::LOCK, 0);
     }
 }
 

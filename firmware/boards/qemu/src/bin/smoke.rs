@@ -6,8 +6,8 @@
 
 use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::hprintln;
+use tcomp_board_qemu::drivers::{InstructionCounter, exit};
 use tcomp_core::{Channel, Model, Status};
-use tcomp_firmware::{InstructionCounter, exit};
 
 /// The example RLG model, encoded by the build script with the host's `tcomp-core`.
 static BLOB: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_model.tcm"));

@@ -1,0 +1,62 @@
+//! Links the QEMU board's binaries with this crate's `memory.x` (mps2-an386), `device.x` (its
+//! interrupt vectors, for cortex-m-rt's `device` feature), cortex-m-rt's `link.x` and defmt's
+//! `defmt.x`, and writes the smoke run's test vector.
+//!
+//! The vector is made here, on the host, by the same `tcomp-core` code the firmware runs: the blob
+//! of an example RLG model (32 centers × 4 features) and, for each of a few hundred samples, the
+//! inputs and the host's compensated output and status. The firmware replays the inputs and must
+//! reproduce every output bit for bit.
+// A build script's failure is the build's: `expect` stops it with its message.
+#![allow(clippy::expect_used)]
+
+use std::{env, fs, path::PathBuf};
+use tcomp_core::testing::{example_model, example_sample};
+use tcomp_core::{Channel, Model};
+
+/// Samples in the smoke vector.
+const SAMPLES: u32 = 400;
+/// The loop period: 200 Hz.
+const PERIOD_S: f32 = 0.005;
+
+fn main() {
+    let out = PathBuf::from(env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
+    let root =
+        PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
+    for file in ["memory.x", "device.x"] {
+        fs::copy(root.join(file), out.join(file)).expect("copy the linker scripts");
+        println!("cargo:rerun-if-changed={file}");
+    }
+    // For this crate's binaries only: the first `memory.x` on the linker's search path wins.
+    println!("cargo:rustc-link-arg-bins=-L{}", out.display());
+    println!("cargo:rerun-if-changed=build.rs");
+    if env::var("TARGET").is_ok_and(|t| t.starts_with("thumb")) {
+        println!("cargo:rustc-link-arg-bins=-Tlink.x");
+        println!("cargo:rustc-link-arg-bin=tcomp-qemu=-Tdefmt.x");
+    }
+
+    let model = example_model::<32, 4, 24>(32, 11);
+    let mut blob = vec![0u8; 8192];
+    let len = model.encode(&mut blob).expect("example model encodes");
+    blob.truncate(len);
+    fs::write(out.join("smoke_model.tcm"), &blob).expect("write blob");
+
+    let decoded = Model::<'_, 32, 4, 24>::decode(&blob).expect("example blob decodes");
+    let mut channel = Channel::<24, 4>::new(PERIOD_S);
+    let mut vector = Vec::new();
+    for n in 0..SAMPLES {
+        let (mut temps, raw) = example_sample(n, PERIOD_S);
+        // Faults the firmware must flag the same way: a NaN anode reading, and an overheated shell.
+        if n == 150 {
+            temps[0] = f32::NAN;
+        }
+        if n == 300 {
+            temps[2] = 95.0;
+        }
+        let o = channel.step(Some(&decoded), &temps, raw);
+        for v in [temps[0], temps[1], temps[2], raw, o.compensated] {
+            vector.extend_from_slice(&v.to_le_bytes());
+        }
+        vector.extend_from_slice(&u32::from(o.status.0).to_le_bytes());
+    }
+    fs::write(out.join("smoke_vector.bin"), &vector).expect("write vector");
+}
