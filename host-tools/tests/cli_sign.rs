@@ -23,18 +23,50 @@ fn setup(dir: &Path) {
     std::fs::copy(board, dir.join("b.toml")).unwrap();
     let out = tcomp(
         dir,
-        &["simulate", "--preset", "ifog-shupe", "--out", "sim", "--seed", "3"],
+        &[
+            "simulate",
+            "--preset",
+            "ifog-shupe",
+            "--out",
+            "sim",
+            "--seed",
+            "3",
+        ],
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let out = tcomp(
         dir,
         &[
-            "fit", "--data", "sim/train.csv", "--target", "gyro_dph", "--reference", "ref_dph",
-            "--feature", "t_coil_c", "--method", "poly3", "--sensor", "ifog", "--axis", "x",
-            "--unit", "deg/h", "--out", "m.tcm",
+            "fit",
+            "--data",
+            "sim/train.csv",
+            "--target",
+            "gyro_dph",
+            "--reference",
+            "ref_dph",
+            "--feature",
+            "t_coil_c",
+            "--method",
+            "poly3",
+            "--sensor",
+            "ifog",
+            "--axis",
+            "x",
+            "--unit",
+            "deg/h",
+            "--out",
+            "m.tcm",
         ],
     );
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 #[test]
@@ -44,13 +76,24 @@ fn keygen_sign_and_inspect() {
     setup(d);
     for prefix in ["station", "rogue"] {
         let out = tcomp(d, &["keygen", "--out", prefix]);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt as _;
-        let mode = std::fs::metadata(d.join("station.key")).unwrap().permissions().mode();
-        assert_eq!(mode & 0o077, 0, "the secret key is readable by its owner only");
+        let mode = std::fs::metadata(d.join("station.key"))
+            .unwrap()
+            .permissions()
+            .mode();
+        assert_eq!(
+            mode & 0o077,
+            0,
+            "the secret key is readable by its owner only"
+        );
     }
     // A key is never overwritten.
     let before = std::fs::read(d.join("station.key")).unwrap();
@@ -64,7 +107,15 @@ fn keygen_sign_and_inspect() {
     let id = KeyId::of(otp.as_slice().try_into().unwrap()).to_string();
 
     let image_args = |sign: Option<&str>, out: &str| {
-        let mut a = vec!["image", "--board", "b.toml", "--serial", "0x7C00001", "--model", "0=m.tcm"];
+        let mut a = vec![
+            "image",
+            "--board",
+            "b.toml",
+            "--serial",
+            "0x7C00001",
+            "--model",
+            "0=m.tcm",
+        ];
         if let Some(k) = sign {
             a.extend(["--sign", k]);
         }
@@ -77,7 +128,11 @@ fn keygen_sign_and_inspect() {
         tcomp(d, &refs)
     };
     let out = run(image_args(Some("station.key"), "signed.bin"));
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(String::from_utf8_lossy(&out.stdout).contains(&format!("signed by key {id}")));
     let out = run(image_args(None, "plain.bin"));
     assert!(out.status.success());
@@ -89,16 +144,27 @@ fn keygen_sign_and_inspect() {
     assert_eq!(&signed[..plain.len()], &plain[..]);
     assert_eq!(signed.len(), plain.len() + sign::BLOCK_LEN);
     assert_eq!(Image::parse(&signed).unwrap().byte_len(), plain.len());
-    assert_eq!(sign::verify(&signed, KeyStore(&otp)).unwrap().to_string(), id);
+    assert_eq!(
+        sign::verify(&signed, KeyStore(&otp)).unwrap().to_string(),
+        id
+    );
 
     // inspect: who signed, and whether it verifies.
     let out = tcomp(d, &["inspect", "signed.bin"]);
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains(&format!("signed by key {id} (not verified")), "{text}");
+    assert!(
+        text.contains(&format!("signed by key {id} (not verified")),
+        "{text}"
+    );
     let out = tcomp(d, &["inspect", "signed.bin", "--key", "station.pub"]);
     assert!(out.status.success());
-    assert!(String::from_utf8_lossy(&out.stdout).contains(&format!("signed by key {id}: verified")));
-    let out = tcomp(d, &["inspect", "signed.bin", "--key", "rogue.pub", "--json"]);
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains(&format!("signed by key {id}: verified"))
+    );
+    let out = tcomp(
+        d,
+        &["inspect", "signed.bin", "--key", "rogue.pub", "--json"],
+    );
     assert_eq!(out.status.code(), Some(1));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["signature"]["key_id"], id);
@@ -108,7 +174,17 @@ fn keygen_sign_and_inspect() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["signature"]["signed"], false);
     // Both keys given (a unit's key store with a rotation): verifies.
-    let out = tcomp(d, &["inspect", "signed.bin", "--key", "rogue.pub", "--key", "station.pub"]);
+    let out = tcomp(
+        d,
+        &[
+            "inspect",
+            "signed.bin",
+            "--key",
+            "rogue.pub",
+            "--key",
+            "station.pub",
+        ],
+    );
     assert!(out.status.success());
     // The image command's JSON names the signer.
     let mut args = image_args(Some("rogue.key"), "rogue.bin");

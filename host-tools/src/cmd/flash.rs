@@ -22,10 +22,10 @@ use serde_json::json;
 use std::path::PathBuf;
 use std::time::Duration;
 use tcomp_board_description::Board;
-use tcomp_core::image::Image;
 use tcomp_core::frame::{DEVELOPMENT, image_state, update_state};
-use tcomp_core::update::{Reason, Status};
+use tcomp_core::image::Image;
 use tcomp_core::update::wire::MAX_FRAME;
+use tcomp_core::update::{Reason, Status};
 use tcomp_train::progress::{Progress, Unit};
 
 /// Arguments of `tcomp flash`.

@@ -243,7 +243,11 @@ pub fn run(file: &Path, bytes: &[u8], json_out: bool, keys: &[[u8; 32]]) -> anyh
         }
     }
     let sig = &v["signature"];
-    let line = match (sig["signed"].as_bool(), sig["key_id"].as_str(), &sig["verified"]) {
+    let line = match (
+        sig["signed"].as_bool(),
+        sig["key_id"].as_str(),
+        &sig["verified"],
+    ) {
         (Some(false), ..) => "unsigned (a unit runs it only in a development build)".to_string(),
         (_, Some(id), Value::Null) => format!("signed by key {id} (not verified: give --key PUB)"),
         (_, Some(id), Value::Bool(true)) => format!("signed by key {id}: verified against --key"),

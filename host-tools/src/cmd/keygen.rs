@@ -60,7 +60,11 @@ fn read_tagged(path: &Path, tag: &str, other: &str, option: &str) -> anyhow::Res
             } else {
                 "public"
             },
-            if tag == SECRET_TAG { "secret" } else { "public" }
+            if tag == SECRET_TAG {
+                "secret"
+            } else {
+                "public"
+            }
         );
     }
     let (Some(t), Some(digits), None) = (first, digits, words.next()) else {
