@@ -11,6 +11,10 @@
 //! Before it, the same image signed by a key the unit was not provisioned with is sent: the unit
 //! must refuse it at COMMIT (RESULT `UnknownKey`), keep running its models (the boot's records
 //! stay bit-exact) and say so in the boot report it sends at once (last update refused, and why).
+//! The refused session leaves slot B written, and nothing erases while the loop runs: the good
+//! image's first BEGIN is refused (`flash error`), the unit resets once that reply has left, its
+//! boot erases slot B before the watchdog starts, and `tcomp flash` is run again (as a user
+//! would); that boot replays the vector from its start, compared bit for bit as before.
 
 use crate::field;
 use crate::proc::{self, Bounded};
@@ -28,6 +32,8 @@ use std::time::Duration;
 const REPLY_TIMEOUT_MS: &str = "3000";
 /// The whole `tcomp flash`: about 1 s of wall time for a 6-channel image.
 const FLASH_LIMIT: Duration = proc::minutes(4);
+/// The unit's reset after it refused a BEGIN whose slot needs the boot's erase.
+const RESET_WAIT: Duration = Duration::from_secs(2);
 /// QEMU naming its pty: at once.
 const PTY_LIMIT: Duration = Duration::from_secs(30);
 
@@ -59,6 +65,9 @@ pub fn run(
         println!(
             "update after the refused one: the unit resets to erase slot B at boot; sending again"
         );
+        // Its reset and boot take milliseconds of guest time; waiting generously keeps the second
+        // run from seeing the first boot's last frames (their sequence numbers start again).
+        std::thread::sleep(RESET_WAIT);
         flash = self::flash(work, &pty, update, "`tcomp flash` over QEMU's pty, again")?;
         report = String::from_utf8_lossy(&flash.stdout).into_owned();
         print!("{report}");
