@@ -144,9 +144,12 @@ pub fn transfer<L: Read + Write>(
                 Err(e) if e.kind() == ErrorKind::BrokenPipe => break,
                 Err(_) => 0,
             };
-            outputs.feed_items(buf.get(..got).unwrap_or(&[]), |item| {
-                if let frame::Item::Boot(r) = item {
-                    report = Some(r);
+            // Still counted: the frames while it listens are in the counts, so in the span too.
+            outputs.feed_items(buf.get(..got).unwrap_or(&[]), |item| match item {
+                frame::Item::Boot(r) => report = Some(r),
+                frame::Item::Data(f) => {
+                    first.get_or_insert(f.sequence);
+                    last = Some(f.sequence);
                 }
             });
         }
