@@ -16,8 +16,9 @@ fn main() {
     write_wiring(&root.join("descriptions"), &out.join("wiring.rs"));
 }
 /// Writes one `[ChannelConfig; N]` const and one board-hash const per description in `dir`, named
-/// after the file (`imu6-rlg-qma.toml` → `IMU6_RLG_QMA`, `IMU6_RLG_QMA_HASH`). A description the
-/// shared reader refuses fails the build with its message (file, line, column).
+/// after the file (`imu6-rlg-qma.toml` → `IMU6_RLG_QMA`, `IMU6_RLG_QMA_HASH`), and its link's baud
+/// rate (`IMU6_RLG_QMA_BAUD`) when it gives one. A description the shared reader refuses fails the
+/// build with its message (file, line, column).
 fn write_wiring(dir: &Path, out: &Path) {
     let mut files: Vec<PathBuf> = fs::read_dir(dir)
         .expect("firmware/descriptions is readable")
@@ -76,6 +77,12 @@ fn write_wiring(dir: &Path, out: &Path) {
             "/// The board hash of `descriptions/{stem}.toml`, as `tcomp image --board` writes it.\npub const {name}_HASH: u64 = {:#x};",
             board.hash()
         );
+        if let Some(baud) = board.baud {
+            let _ = writeln!(
+                code,
+                "/// The serial link's baud rate of `descriptions/{stem}.toml` (`[link] baud`): the board's UART\n/// runs at it and `tcomp flash --board` opens the port at it.\npub const {name}_BAUD: u32 = {baud};"
+            );
+        }
     }
     fs::write(out, code).expect("write wiring.rs");
 }

@@ -47,9 +47,6 @@ pub type FwChannel = Channel<NODES, FEATURES>;
 
 /// The loop period: 200 Hz.
 pub const PERIOD_S: f32 = 0.005;
-/// The serial link's baud rate, the one place it is set: the STM32F407 board configures USART1
-/// with it and sizes its receive ring from it (the QEMU board's UART has no line rate).
-pub const BAUD: u32 = 921_600;
 /// Largest relative deviation of a latched interval from the nominal periods it covers that is
 /// still believed. The sample timer and the counter block's timestamp clock are crystals (tens of
 /// ppm) and the latch is a hardware edge, so a healthy interval is within 0.1 % of nominal even

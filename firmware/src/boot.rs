@@ -7,17 +7,26 @@
 
 use crate::app::{ChannelConfig, LoadError, PERIOD_S};
 use crate::image::{Image, ImageError};
-use tcomp_core::frame::{BOOT_REPORT_PERIOD_S, BootReport, ChannelState, image_state};
+use crate::trust::{self, Signer};
+use tcomp_core::frame::{
+    BOOT_REPORT_PERIOD_S, BootReport, ChannelState, DEVELOPMENT, WATCHDOG, image_state,
+};
+use tcomp_core::update::Reason;
 
 /// Samples between two reports: [`BOOT_REPORT_PERIOD_S`] at the loop's rate.
 pub const REPORT_PERIODS: u32 = (BOOT_REPORT_PERIOD_S as f32 / PERIOD_S) as u32;
 
-/// The report of a boot that read `image` on the unit `unit_serial`, with each channel of `config`
-/// loaded as `loaded` says; `watchdog` when the boot followed a watchdog reset. Not inlined: a
-/// boot path keeps its frame off the model decoder's stack.
+/// The report of a boot that runs `image` (signed by `signer`) on the unit `unit_serial`, with
+/// each channel of `config` loaded as `loaded` says; `watchdog` when the boot followed a watchdog
+/// reset. A development build ([`trust::DEVELOPMENT`]) says so in its flags; when no image runs
+/// because the one found was refused (`refused`: unsigned, signed by an unknown key, a bad
+/// signature, another unit's), the image state says why. Not inlined: a boot path keeps its frame off the model
+/// decoder's stack.
 #[inline(never)]
 pub fn report(
     image: &[u8],
+    signer: Option<Signer>,
+    refused: Option<Reason>,
     unit_serial: u64,
     config: &[ChannelConfig],
     loaded: &[Result<(), LoadError>],
@@ -25,7 +34,9 @@ pub fn report(
 ) -> BootReport {
     let mut r = BootReport::default();
     r.unit_serial = unit_serial;
-    r.flags = u8::from(watchdog);
+    r.flags =
+        if watchdog { WATCHDOG } else { 0 } | if trust::DEVELOPMENT { DEVELOPMENT } else { 0 };
+    r.signer = signer.map_or(0, |s: Signer| s.report_id());
     match Image::parse(image) {
         Ok(i) => {
             r.image_version = i.version();
@@ -42,7 +53,9 @@ pub fn report(
                 Ok(()) => image_state::OK,
             };
         }
-        Err(ImageError::NoImage) => r.image_state = image_state::NONE,
+        Err(ImageError::NoImage) => {
+            r.image_state = refused.map_or(image_state::NONE, trust::image_state);
+        }
         Err(_) => r.image_state = image_state::INVALID,
     }
     let mut channels = [ChannelState::default(); tcomp_core::frame::MAX_CHANNELS];
@@ -55,4 +68,13 @@ pub fn report(
     let n = config.len().min(loaded.len()).min(channels.len());
     r.set_channels(channels.get(..n).unwrap_or(&[]));
     r
+}
+
+/// Stamps a report before it is sent again: the next data frame's sequence number, and the last
+/// update since boot as the update task published it ([`crate::update::last_update`]).
+pub fn stamp(report: &mut BootReport, sequence: u32) {
+    report.sequence = sequence;
+    let (state, reason) = crate::update::last_update();
+    report.update = state;
+    report.update_reason = reason;
 }

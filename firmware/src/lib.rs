@@ -3,7 +3,8 @@
 //! queue, the update task and the watchdog policy), the fault record kept across resets
 //! ([`fault`]), the time-base check ([`timing`]), the boot report ([`boot`]), the channel tables
 //! generated from the board descriptions ([`wiring`]), the model-blob image in flash ([`image`])
-//! and its two slots ([`slots`]), the update task's protocol end ([`update`]), and the replay board
+//! and its two slots ([`slots`]), which images the unit runs (made for it, signed by a provisioned
+//! key: [`trust`]), the update task's protocol end ([`update`]), and the replay board
 //! of the QEMU run ([`replay`]).
 //!
 //! Nothing here touches hardware: the board crates (`boards/qemu`, `boards/stm32f4`) own the
@@ -20,8 +21,12 @@ pub mod image;
 pub mod replay;
 pub mod slots;
 pub mod timing;
+pub mod trust;
 pub mod update;
 pub mod wiring;
+
+#[cfg(test)]
+mod trust_tests;
 
 /// FNV-1a over the bits of a record, folded into `hash`: the running output hash both sides print.
 pub fn fold_hash(hash: u32, record: &app::Record) -> u32 {

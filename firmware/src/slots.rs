@@ -8,13 +8,22 @@
 //! `TCMI`, no slot header) at the start of slot A is used as generation 0: that is what
 //! `probe-rs download` or QEMU's loader put there, and an update then writes slot B and wins.
 //! Failing both, no models: every channel runs `NO_MODEL`.
+//!
+//! Every candidate also passes the unit's trust check (`accept`: [`crate::trust::Trust::check`],
+//! made for this unit and signed by a provisioned key) before it is chosen: a slot that fails it
+//! counts as corrupt (so a trial never starts on it), a probe's image that fails it does not run
+//! (but is kept, like any probe image, and the update writes slot B). Each image is verified once
+//! per boot however often the slot logic reads its state, and the last refusal is kept for the
+//! boot report.
 
+use crate::trust::Signer;
 use embedded_storage::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
 use tcomp_core::image::Image;
 use tcomp_core::slots::{Active, Header, Layout, SlotId, select};
 pub use tcomp_core::slots::{BootSlots, confirm};
+use tcomp_core::update::Reason;
 
 /// mps2-an386: `MODELS` is 64 KiB at `0x003F_0000`: slot A at its start, slot B at `0x003F_8000`.
 pub const QEMU_LAYOUT: Layout = Layout {
@@ -59,6 +68,11 @@ pub struct Choice {
     pub trial: bool,
     /// A slot whose trial failed was found: this boot runs the one before it.
     pub rolled_back: bool,
+    /// Who vouches for the image that runs (`None` without one).
+    pub signer: Option<Signer>,
+    /// Why the last readable image the boot considered was refused by the trust check (another
+    /// unit's, unsigned, an unknown key, a bad signature), for the boot report.
+    pub refused: Option<Reason>,
 }
 
 /// A board's `MODELS` region read as a [`ReadNorFlash`] (offsets from its start), and its bytes as
@@ -84,67 +98,149 @@ fn holds_image<F: MappedFlash>(flash: &F, offset: u32, len: u32) -> bool {
         .is_some_and(|b| Image::parse(b).is_ok())
 }
 
+/// A candidate's offset and length, and the trust check's verdict on it.
+type Verdict = (u32, u32, Result<Signer, Reason>);
+
+/// The trust check of one boot over the images it reads: each candidate (a slot's payload, a
+/// probe's region) verified once, however often the slot logic inspects its slot, and the last
+/// refusal kept.
+struct Trusted<A> {
+    accept: A,
+    /// Verdicts by (offset, length): slot A's payload, slot B's, a probe's region.
+    seen: [Option<Verdict>; 3],
+    refused: Option<Reason>,
+}
+
+impl<A: Fn(&[u8]) -> Result<Signer, Reason>> Trusted<A> {
+    const fn new(accept: A) -> Self {
+        Self {
+            accept,
+            seen: [None; 3],
+            refused: None,
+        }
+    }
+
+    /// The verdict on `[offset, offset + len)`; `None` when it holds no readable image.
+    fn verdict<F: MappedFlash>(
+        &mut self,
+        flash: &F,
+        offset: u32,
+        len: u32,
+    ) -> Option<Result<Signer, Reason>> {
+        let bytes = flash.mapped(offset, len)?;
+        if Image::parse(bytes).is_err() {
+            return None;
+        }
+        if let Some((_, _, v)) = self
+            .seen
+            .iter()
+            .flatten()
+            .find(|(o, l, _)| *o == offset && *l == len)
+        {
+            return Some(*v);
+        }
+        let v = (self.accept)(bytes);
+        if let Some(free) = self.seen.iter_mut().find(|s| s.is_none()) {
+            *free = Some((offset, len, v));
+        }
+        if let Err(why) = v {
+            self.refused = Some(why);
+        }
+        Some(v)
+    }
+
+    /// Whether `[offset, offset + len)` holds an image this unit may run.
+    fn accepts<F: MappedFlash>(&mut self, flash: &F, offset: u32, len: u32) -> bool {
+        matches!(self.verdict(flash, offset, len), Some(Ok(_)))
+    }
+}
+
 /// Chooses the image to run from the `MODELS` region `flash` (read only: what [`boot`] would run,
-/// without its trial and erase work). A flash read error counts as "no slot". A slot on trial reads
-/// as a failed trial here (only the boot that programs the trial word runs it).
-pub fn choose<F: MappedFlash>(flash: &mut F, layout: &Layout) -> Choice {
+/// without its trial and erase work); `accept` is the unit's trust check of a candidate. A flash
+/// read error counts as "no slot". A slot on trial reads as a failed trial here (only the boot
+/// that programs the trial word runs it).
+pub fn choose<F: MappedFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    accept: impl Fn(&[u8]) -> Result<Signer, Reason>,
+) -> Choice {
+    let mut trusted = Trusted::new(accept);
     let active = select(flash, layout, |f: &mut F, off, len| {
-        holds_image(f, off, len)
+        trusted.accepts(f, off, len)
     })
     .ok()
     .flatten();
-    choice(flash, layout, active)
+    choice(flash, layout, active, &mut trusted)
 }
 
-/// The choice for the committed slot `active`, or failing one a probe's bare image at slot A, or
-/// nothing.
-fn choice<F: MappedFlash>(flash: &F, layout: &Layout, active: Option<Active>) -> Choice {
+/// The choice for the committed slot `active`, or failing one a probe's bare image at slot A that
+/// passes the trust check, or nothing. A probe's image that fails it still counts as the active
+/// slot A for the update receiver (kept; an update writes slot B), but does not run.
+fn choice<F: MappedFlash, A: Fn(&[u8]) -> Result<Signer, Reason>>(
+    flash: &F,
+    layout: &Layout,
+    active: Option<Active>,
+    trusted: &mut Trusted<A>,
+) -> Choice {
     if let Some(active) = active {
+        let (at, len) = (active.payload(layout), active.header.length);
         return Choice {
-            image: Some((active.payload(layout), active.header.length)),
+            image: Some((at, len)),
             active: Some(active),
             source: Source::Slot(active.slot, active.header.generation),
             trial: false,
             rolled_back: false,
+            signer: trusted.verdict(flash, at, len).and_then(Result::ok),
+            refused: trusted.refused,
         };
     }
-    if holds_image(flash, layout.a, layout.size) {
-        let header = Header {
+    let probe = Active {
+        slot: SlotId::A,
+        header: Header {
             generation: 0,
             length: layout.size,
             payload_crc: 0,
-        };
-        return Choice {
+        },
+    };
+    match trusted.verdict(flash, layout.a, layout.size) {
+        Some(Ok(signer)) => Choice {
             image: Some((layout.a, layout.size)),
-            active: Some(Active {
-                slot: SlotId::A,
-                header,
-            }),
+            active: Some(probe),
             source: Source::Probe,
             trial: false,
             rolled_back: false,
-        };
-    }
-    Choice {
-        image: None,
-        active: None,
-        source: Source::None,
-        trial: false,
-        rolled_back: false,
+            signer: Some(signer),
+            refused: trusted.refused,
+        },
+        refused => Choice {
+            image: None,
+            active: refused.is_some().then_some(probe),
+            source: Source::None,
+            trial: false,
+            rolled_back: false,
+            signer: None,
+            refused: trusted.refused,
+        },
     }
 }
 
 /// The boot's work on the slots, before the watchdog starts ([`tcomp_core::slots::boot`]): the
-/// image to run, a newly committed slot's trial begun, the slot an update will write erased unless
-/// the running image is on trial (the old one is then the rollback). A bare image a probe wrote
-/// at slot A counts as confirmed and is kept while it runs.
-pub fn boot<F: NorFlash + MappedFlash>(flash: &mut F, layout: &Layout) -> Result<Choice, F::Error> {
+/// image to run (each candidate through `accept`, the unit's trust check, before a slot is
+/// chosen: a slot it refuses is never put on trial), a newly committed slot's trial begun, the
+/// slot an update will write erased unless the running image is on trial (the old one is then the
+/// rollback). A bare image a probe wrote at slot A counts as confirmed and is kept while it runs.
+pub fn boot<F: NorFlash + MappedFlash>(
+    flash: &mut F,
+    layout: &Layout,
+    accept: impl Fn(&[u8]) -> Result<Signer, Reason>,
+) -> Result<Choice, F::Error> {
     let probe = holds_image(flash, layout.a, layout.size);
+    let mut trusted = Trusted::new(accept);
     let slots =
         tcomp_core::slots::boot(flash, layout, probe.then_some(SlotId::A), |f, off, len| {
-            holds_image(f, off, len)
+            trusted.accepts(f, off, len)
         })?;
-    let mut choice = choice(flash, layout, slots.active);
+    let mut choice = choice(flash, layout, slots.active, &mut trusted);
     choice.trial = slots.trial;
     choice.rolled_back = slots.rolled_back;
     Ok(choice)
@@ -292,6 +388,11 @@ mod tests {
 
     type Sim = SimNor<{ 64 * 1024 }, { 32 * 1024 }>;
 
+    /// Accepts any readable image (the trust checks have their own tests, `trust_tests.rs`).
+    fn any(_: &[u8]) -> Result<Signer, tcomp_core::update::Reason> {
+        Ok(Signer::Unsigned)
+    }
+
     /// The flash model seen as a board's mapped region.
     #[derive(Clone)]
     struct Flash(Sim);
@@ -338,7 +439,7 @@ mod tests {
 
     /// The image the boot would run.
     fn booted(flash: &mut Flash) -> (Source, Vec<u8>) {
-        let c = choose(flash, &QEMU_LAYOUT);
+        let c = choose(flash, &QEMU_LAYOUT, any);
         let bytes = c
             .image
             .and_then(|(off, len)| flash.mapped(off, len))
@@ -351,17 +452,20 @@ mod tests {
     /// driven by the core's sender. Returns the sender's status and whether the run asked the
     /// boot for an erase.
     fn update(flash: &mut Flash, new: &[u8]) -> (Status, bool) {
-        let choice = choose(flash, &QEMU_LAYOUT);
+        let choice = choose(flash, &QEMU_LAYOUT, any);
         let mut task = UpdateTask::new(QEMU_LAYOUT, choice.active);
         let mut run = RunTime::new(flash.clone());
-        let mut tx = Sender::new(new);
+        let mut tx = Sender::new(new, 1);
         let mut host = Decoder::new();
         let mut frame = [0u8; MAX_FRAME];
         while let Some(n) = tx.request(&mut frame) {
             for &b in &frame[..n] {
                 let mut reply = [0u8; MAX_REPLY];
                 let validate = |f: &mut RunTime<Flash>, off, len| {
-                    f.mapped(off, len).is_some_and(|b| validates(b, 0, len))
+                    f.mapped(off, len)
+                        .filter(|b| validates(b, 0, len))
+                        .map(|_| ())
+                        .ok_or(tcomp_core::update::Reason::Invalid)
                 };
                 if let Some(m) = task.push(b, &mut run, b"SN", validate, &mut reply) {
                     for &r in &reply[..m] {
@@ -379,7 +483,7 @@ mod tests {
 
     /// A boot: the slots' trial and erase work; returns the choice.
     fn boot_now(flash: &mut Flash) -> Choice {
-        boot(flash, &QEMU_LAYOUT).unwrap()
+        boot(flash, &QEMU_LAYOUT, any).unwrap()
     }
 
     /// The application's confirm of the slot a boot runs on trial.
@@ -391,7 +495,7 @@ mod tests {
     #[test]
     fn erased_flash_runs_no_models() {
         let mut flash = Flash(Sim::new());
-        let c = choose(&mut flash, &QEMU_LAYOUT);
+        let c = choose(&mut flash, &QEMU_LAYOUT, any);
         assert_eq!((c.source, c.active, c.image), (Source::None, None, None));
     }
 

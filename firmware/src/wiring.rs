@@ -85,3 +85,74 @@ mod tests {
         assert_eq!(image.header().unwrap().board_hash, MEMS6_HASH);
     }
 }
+
+/// The facts about the link and the model region that three places state — the board
+/// description, the firmware's slot layouts and memory maps, the READMEs and `tcomp`'s help —
+/// checked against each other.
+#[cfg(test)]
+mod facts {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+
+    extern crate std;
+    use crate::slots::{QEMU_LAYOUT, STM32F4_LAYOUT};
+    use std::path::Path;
+    use std::string::String;
+    use tcomp_board_description::Board;
+    use tcomp_board_description::targets::{QEMU_MPS2_AN386, STM32F407};
+
+    fn read(rel: &str) -> String {
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)).unwrap()
+    }
+
+    /// `ORIGIN = 0x…` of the `MODELS` line of a `memory.x`.
+    fn models_origin(memory_x: &str) -> u32 {
+        let line = memory_x
+            .lines()
+            .find(|l| l.trim_start().starts_with("MODELS"))
+            .unwrap();
+        let hex = line.split("ORIGIN = 0x").nth(1).unwrap();
+        u32::from_str_radix(hex.split(',').next().unwrap().trim(), 16).unwrap()
+    }
+
+    #[test]
+    fn the_generated_baud_is_the_descriptions() {
+        let board = Board::load(
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("descriptions/imu6-rlg-qma.toml"),
+        )
+        .unwrap();
+        assert_eq!(board.baud, Some(super::IMU6_RLG_QMA_BAUD));
+        assert_eq!(super::IMU6_RLG_QMA_BAUD, 921_600);
+    }
+
+    /// The board README's flash command takes the baud from the description, and the rate it
+    /// states is the description's.
+    #[test]
+    fn the_board_readme_agrees_with_the_description() {
+        let readme = read("boards/stm32f4/README.md");
+        assert!(
+            readme.contains("tcomp flash --board firmware/descriptions/imu6-rlg-qma.toml"),
+            "the README's update command must name the description"
+        );
+        assert!(readme.contains("921,600 baud"));
+        assert!(!readme.contains("115,200") && !readme.contains("115200"));
+        let setup = read("boards/stm32f4/src/setup.rs");
+        assert!(setup.contains("pub const BAUD: u32 = crate::LINK_BAUD;"));
+    }
+
+    /// `tcomp`'s table of targets (help texts) is the firmware's: memory maps and slot layouts.
+    #[test]
+    fn the_tools_targets_are_the_firmwares() {
+        assert_eq!(
+            models_origin(&read("boards/qemu/memory.x")),
+            QEMU_MPS2_AN386.models_at
+        );
+        assert_eq!(
+            models_origin(&read("boards/stm32f4/memory.x")),
+            STM32F407.models_at
+        );
+        for (layout, target) in [(QEMU_LAYOUT, QEMU_MPS2_AN386), (STM32F4_LAYOUT, STM32F407)] {
+            assert_eq!((layout.a, layout.size), (0, target.slot_bytes));
+            assert_eq!(layout.b, target.slot_bytes);
+        }
+    }
+}

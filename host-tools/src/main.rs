@@ -34,8 +34,8 @@ enum Command {
     Eval(cmd::eval::Args),
     /// Simulate temperature-chamber runs with known physics: train.csv, verify.csv and truth.json.
     Simulate(cmd::simulate::Args),
-    /// Pack model blobs, checked against a board description, into the calibration image flashed
-    /// at 0x003F0000.
+    /// Pack model blobs, checked against a board description, into a unit's calibration image.
+    #[command(about = cmd::image::about())]
     Image(cmd::image::Args),
     /// Where a model fails and which physical effect is most likely missing (with the evidence).
     Diagnose(cmd::diagnose::Args),
@@ -55,6 +55,9 @@ enum Command {
     AutopilotParams(cmd::autopilot::Args),
     /// Replace a unit's model image over its serial link (A/B slots, verified, committed last).
     Flash(cmd::flash::Args),
+    /// Make an Ed25519 key pair for signing calibration images, and the key block a unit is
+    /// provisioned with.
+    Keygen(cmd::keygen::Args),
 }
 
 fn main() -> ExitCode {
@@ -91,6 +94,7 @@ fn run(command: Command) -> anyhow::Result<()> {
         Command::Demo(args) => cmd::demo::run(&args),
         Command::Frames(args) => cmd::frames::run(&args),
         Command::Flash(args) => cmd::flash::run(&args),
+        Command::Keygen(args) => cmd::keygen::run(&args),
     }
 }
 

@@ -450,6 +450,18 @@ fn catalogue() -> Vec<Case> {
         case("image board input on no thermometer", "image --board bad.toml --serial 1 --model 0=m.tcm --out out.bin").file("bad.toml", BOARD.replace("t_coil_c = \"coil\" }\n[[channel]]", "t_coil_c = \"cool\" }\n[[channel]]")).says(&["bad.toml", "channel 0 (ifog-a)", "t_coil_c", "cool"]),
         case("image serial not a number", "image --board b.toml --serial x1 --model 0=m.tcm --out out.bin").usage().says(&["--serial", "x1"]),
         case("image channel twice", "image --board b.toml --serial 1 --model 0=m.tcm --model 0=m.tcm --out out.bin").says(&["channel 0 is given twice"]),
+        // signatures (issue 26): keys that are missing, of the wrong kind or cut short; keygen never overwrites
+        case("image --sign a missing key", "image --board b.toml --serial 1 --model 0=m.tcm --sign nokey.key --out out.bin").says(&["--sign nokey.key", "cannot read"]),
+        case("image --sign a public key", "image --board b.toml --serial 1 --model 0=m.tcm --sign k.pub --out out.bin").file("k.pub", format!("tcomp-ed25519-public {}\n", "ab".repeat(32))).says(&["--sign k.pub", "public key, not a secret key"]),
+        case("image --sign a key cut short", "image --board b.toml --serial 1 --model 0=m.tcm --sign short.key --out out.bin").file("short.key", "tcomp-ed25519-secret 00ff\n").says(&["--sign short.key", "64 hex digits"]),
+        case("image --sign a key with a non-hex digit", "image --board b.toml --serial 1 --model 0=m.tcm --sign g.key --out out.bin").file("g.key", format!("tcomp-ed25519-secret {}g\n", "0".repeat(63))).says(&["--sign g.key", "not hex"]),
+        case("image --sign raw bytes", "image --board b.toml --serial 1 --model 0=m.tcm --sign raw.key --out out.bin").file("raw.key", vec![7u8; 32]).says(&["--sign raw.key"]),
+        case("inspect --key a secret key", "inspect m.tcm --key s.key").file("s.key", format!("tcomp-ed25519-secret {}\n", "01".repeat(32))).says(&["--key s.key", "secret key, not a public key"]),
+        case("inspect --key not a key file", "inspect m.tcm --key junk.pub").file("junk.pub", "hello\n").says(&["--key junk.pub", "tcomp keygen"]),
+        case("inspect --key missing", "inspect m.tcm --key none.pub").says(&["--key none.pub"]),
+        case("keygen over an existing key", "keygen --out k").file("k.key", format!("tcomp-ed25519-secret {}\n", "01".repeat(32))).says(&["k.key exists", "never overwritten"]),
+        case("keygen in a missing directory", "keygen --out nodir/k").says(&["nodir", "does not exist"]),
+        case("flash without a rate", "flash --port /nonexistent/tty out.bin").usage().says(&["--board"]),
         // usage
         case("unknown flag", "FIT --data run.csv --out out.tcm --bogus").usage().says(&["--bogus"]),
         case("missing required --out", "fit --data run.csv --target gyro_dph").usage().says(&["--out"]),

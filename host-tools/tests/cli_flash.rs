@@ -10,7 +10,7 @@ use std::process::Command;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
-use tcomp_core::frame::{ChannelOutput, Frame};
+use tcomp_core::frame::{BootReport, ChannelOutput, Frame, update_state};
 use tcomp_core::image::{Image, write_image};
 use tcomp_core::slots::sim::SimNor;
 use tcomp_core::slots::{Layout, SlotId, select};
@@ -69,7 +69,11 @@ fn unit(mut port: TTYPort, stop: Arc<AtomicBool>) -> Flash {
         let mut out = Vec::new();
         for &b in &buf[..n] {
             if let Some(p) = decoder.push(b) {
-                let reply = rx.handle(&mut flash, &p, b"SN-PTY-7", validate);
+                let reply = rx.handle(&mut flash, &p, b"SN-PTY-7", |f, o, l| {
+                    validate(f, o, l)
+                        .then_some(())
+                        .ok_or(tcomp_core::update::Reason::Invalid)
+                });
                 data_seen += usize::from(p.kind == Kind::Data);
                 if p.kind == Kind::Data && data_seen == 2 {
                     continue; // this reply is lost
@@ -77,6 +81,15 @@ fn unit(mut port: TTYPort, stop: Arc<AtomicBool>) -> Flash {
                 let mut f = [0u8; MAX_FRAME];
                 let m = reply.packet().encode(&mut f).unwrap();
                 out.extend_from_slice(&f[..m]);
+                // As the firmware does: its boot report as soon as an update ends.
+                if reply.kind() == Kind::Result {
+                    let mut r = BootReport::default();
+                    r.unit_serial = 7;
+                    r.update = update_state::COMMITTED;
+                    let mut b = [0u8; 128];
+                    let k = r.encode(&mut b).unwrap();
+                    out.extend_from_slice(&b[..k]);
+                }
             }
         }
         let frame = Frame::new(
@@ -112,7 +125,7 @@ fn an_update_over_a_pty_commits_and_keeps_the_output_frames() {
     let unit_stop = Arc::clone(&stop);
     let unit = std::thread::spawn(move || unit(master, unit_stop));
     let out = Command::new(env!("CARGO_BIN_EXE_tcomp"))
-        .args(["flash", "--port", &name, "--timeout-ms", "200", "--json"])
+        .args(["flash", "--port", &name, "--baud", "921600", "--json"])
         .arg(&path)
         .output()
         .unwrap();
@@ -136,6 +149,7 @@ fn an_update_over_a_pty_commits_and_keeps_the_output_frames() {
         "the lost reply was retried"
     );
     assert!(v["output_frames"].as_u64().unwrap() > 5);
+    assert_eq!(v["unit_report"]["last_update"], "committed", "{v}");
     assert_eq!(v["output_lost"], 0);
     let active = select(&mut flash, &LAYOUT, validate).unwrap().unwrap();
     assert_eq!(active.slot, SlotId::A);
@@ -149,7 +163,7 @@ fn a_bad_image_is_refused_before_the_port_is_opened() {
     let path = dir.path().join("junk.bin");
     std::fs::write(&path, b"not an image at all").unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_tcomp"))
-        .args(["flash", "--port", "/nonexistent/tty"])
+        .args(["flash", "--port", "/nonexistent/tty", "--baud", "921600"])
         .arg(&path)
         .output()
         .unwrap();
@@ -164,4 +178,39 @@ fn a_bad_image_is_refused_before_the_port_is_opened() {
         "the port must not be touched: {err}"
     );
     assert!(out.stdout.is_empty());
+}
+
+/// The help names the product board's model address (not only QEMU's), and `tcomp flash` takes its
+/// rate from the description or refuses to guess one.
+#[test]
+fn the_help_names_the_boards_address_and_flash_needs_a_rate() {
+    let help = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+        .args(["image", "--help"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        text.contains("0x080C0000 on the STM32F407 board") && text.contains("0x003F0000"),
+        "{text}"
+    );
+    let help = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+        .args(["flash", "--help"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        text.contains("--board <FILE>") && text.contains("[link] baud"),
+        "{text}"
+    );
+    assert!(!text.contains("115200"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("models.bin");
+    std::fs::write(&path, image()).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_tcomp"))
+        .args(["flash", "--port", "/nonexistent/tty"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "clap's usage error");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--board"));
 }

@@ -51,6 +51,8 @@ fn inspect(py: Python<'_>, blob: Vec<u8>) -> PyResult<String> {
         let args = tcomp::cmd::inspect::Args {
             model: PathBuf::from(BLOB_LABEL),
             json: true,
+            // A blob carries no signature (images do: `tcomp inspect IMAGE --key`).
+            keys: Vec::new(),
         };
         Ok(tcomp::cmd::inspect::blob_json(&args, &blob, &model).to_string())
     })

@@ -30,7 +30,20 @@
 //! counter = 0        # or `sample = N` for a digital IMU's register
 //! scale = 1.0e-5     # arcsec per pulse (RLG, IFOG), µg per Hz (QMA), unit per LSB (sample)
 //! inputs = { t_anode_c = "rlg-x-anode" }
+//!
+//! [link]
+//! baud = 921600      # the unit's serial link: its frames out, `tcomp flash` in
 //! ```
+//!
+//! The link's baud rate is written here once: the board binary's UART is configured from it (a
+//! constant `build.rs` generates), and `tcomp flash --board FILE` opens the port at it, so the
+//! firmware, the tool and the board's README cannot disagree. A description without `[link]`
+//! describes a design no board binary runs yet; `tcomp flash` then needs `--baud`.
+//!
+//! Where a unit keeps its models (the `MODELS` region of each board's memory map) is not part of
+//! a description, which the QEMU board and the STM32F407 board share: it is [`targets::TARGETS`].
+pub mod targets;
+
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -85,7 +98,18 @@ struct RawBoard {
     thermometers: Vec<RawTherm>,
     #[serde(default, rename = "channel")]
     channels: Vec<RawChannel>,
+    link: Option<RawLink>,
 }
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLink {
+    baud: u32,
+}
+
+/// The slowest and fastest baud rates a description may give: 300 (the slowest rate a serial
+/// port names) to 10.5 Mbaud (the STM32F407's USART1 on its 84 MHz bus, oversampling by 8).
+pub const BAUD_RANGE: std::ops::RangeInclusive<u32> = 300..=10_500_000;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -125,6 +149,8 @@ pub struct Board {
     pub path: PathBuf,
     /// The design's name.
     pub name: String,
+    /// The serial link's baud rate (`[link] baud`), if the description gives one.
+    pub baud: Option<u32>,
     thermometers: Vec<(String, u8, u8, ThermKind)>,
     channels: Vec<Channel>,
 }
@@ -189,9 +215,23 @@ impl Board {
             let ch = channel(c, &thermometers).map_err(|m| invalid(place, m))?;
             channels.push(ch);
         }
+        let baud = match raw.link {
+            Some(RawLink { baud }) if !BAUD_RANGE.contains(&baud) => {
+                return Err(invalid(
+                    "link".into(),
+                    format!(
+                        "`baud` {baud} is outside {}..={}",
+                        BAUD_RANGE.start(),
+                        BAUD_RANGE.end()
+                    ),
+                ));
+            }
+            link => link.map(|l| l.baud),
+        };
         Ok(Self {
             path: path.to_path_buf(),
             name: raw.name,
+            baud,
             thermometers,
             channels,
         })

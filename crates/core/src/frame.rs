@@ -53,7 +53,7 @@ use crate::blob::crc32;
 mod boot;
 pub use boot::{
     BOOT_CHANNEL_LEN, BOOT_HEADER_LEN, BOOT_REPORT_PERIOD_S, BOOT_VERSION, BootReport,
-    ChannelState, boot_len, image_state,
+    ChannelState, DEVELOPMENT, WATCHDOG, boot_len, image_state, update_state,
 };
 
 /// The two bytes every frame starts with.

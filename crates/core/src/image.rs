@@ -69,7 +69,14 @@
 //! serial or provenance; [`Image::header`] and [`Image::channel`] give `None` for it.
 //!
 //! Erased flash (`0xFF…`) or an empty region (zeros) has no magic and reads as "no image".
+//!
+//! # Signature
+//! A signed image is followed, at its length L, by an 80-byte Ed25519 signature block over bytes
+//! `[0, L + 16)` ([`sign`]: the block's layout, the key store a unit is provisioned with, the
+//! verifier). The reader above ignores what follows the image, so a signed image parses as the
+//! image it signs.
 
+pub mod sign;
 pub mod table;
 mod v2;
 mod write;

@@ -7,13 +7,19 @@
 //! a mix and never nothing (when there was an old one); which one is fixed by where the cut fell;
 //! and the old image's bytes must still be in flash until the new one is confirmed. `cargo xtask
 //! ci` runs this test and reads its `POWER-CUT` line.
+//!
+//! The same proof runs for a unit that checks Ed25519 signatures (issue 26): at boot, before a
+//! slot is chosen (so before its trial or confirm words count), and at COMMIT, before the commit
+//! word; its `POWER-CUT-SIGNED` line adds an update signed by another key, which no cut can make
+//! the unit run.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
+use tcomp_core::image::sign::{self, BLOCK_LEN, KeyStore};
 use tcomp_core::image::{Image, write_image};
 use tcomp_core::slots::sim::{Cut, SimNor};
 use tcomp_core::slots::{Layout, PAYLOAD_AT, SlotId, boot, confirm, select};
 use tcomp_core::update::wire::{Decoder, MAX_FRAME};
-use tcomp_core::update::{Receiver, Sender, Status};
+use tcomp_core::update::{Failure, Reason, Receiver, Sender, Status};
 
 const SECTOR: usize = 128 * 1024;
 type Flash = SimNor<{ 2 * SECTOR }, SECTOR>;
@@ -47,17 +53,31 @@ fn image(seed: u32) -> Vec<u8> {
     buf
 }
 
-fn validate(flash: &mut Flash, offset: u32, len: u32) -> bool {
-    let (at, len) = (offset as usize, len as usize);
-    flash
-        .bytes()
-        .get(at..at + len)
-        .is_some_and(|b| Image::parse(b).is_ok())
+/// What the unit accepts: a readable image, and with `keys` one signed by a key among them.
+#[derive(Clone, Debug, Default)]
+struct Unit {
+    keys: Option<Vec<u8>>,
+}
+
+impl Unit {
+    /// The unit's check of `[offset, offset + len)`: at boot (a slot that fails it is passed over)
+    /// and at COMMIT (a payload that fails it is never committed).
+    fn check(&self, flash: &Flash, offset: u32, len: u32) -> Result<(), Reason> {
+        let (at, len) = (offset as usize, len as usize);
+        let bytes = flash.bytes().get(at..at + len).ok_or(Reason::Invalid)?;
+        Image::parse(bytes).map_err(|_| Reason::Invalid)?;
+        match &self.keys {
+            None => Ok(()),
+            Some(keys) => sign::verify(bytes, KeyStore(keys))
+                .map(|_| ())
+                .map_err(|_| Reason::BadSignature),
+        }
+    }
 }
 
 /// A boot as the firmware runs it (its trial and erase work included): the payload it runs.
-fn boot_run(flash: &mut Flash) -> Option<(SlotId, Vec<u8>)> {
-    let b = boot(flash, &LAYOUT, None, validate).ok()?;
+fn boot_run(flash: &mut Flash, unit: &Unit) -> Option<(SlotId, Vec<u8>)> {
+    let b = boot(flash, &LAYOUT, None, |f, o, l| unit.check(f, o, l).is_ok()).ok()?;
     let active = b.active?;
     let at = active.payload(&LAYOUT) as usize;
     let len = active.header.length as usize;
@@ -74,17 +94,17 @@ fn holds(flash: &Flash, image: &[u8]) -> bool {
 
 /// One update as the unit runs it: boot selection, then every request of the host's sender
 /// encoded, decoded by the unit's decoder and handled, until the update ends or the power fails.
-fn update(flash: &mut Flash, image: &[u8]) -> Status {
-    let active = select(flash, &LAYOUT, validate).unwrap();
+fn update(flash: &mut Flash, image: &[u8], unit: &Unit) -> Status {
+    let active = select(flash, &LAYOUT, |f, o, l| unit.check(f, o, l).is_ok()).unwrap();
     let mut rx = Receiver::new(LAYOUT, active);
-    let mut tx = Sender::new(image);
+    let mut tx = Sender::new(image, 1);
     let (mut unit_in, mut host_in) = (Decoder::new(), Decoder::new());
     let mut frame = [0u8; MAX_FRAME];
     while let Some(n) = tx.request(&mut frame) {
         let mut reply_bytes = Vec::new();
         for &b in &frame[..n] {
             if let Some(p) = unit_in.push(b) {
-                let reply = rx.handle(flash, &p, b"SN-TEST", validate);
+                let reply = rx.handle(flash, &p, b"SN-TEST", |f, o, l| unit.check(f, o, l));
                 let mut out = [0u8; MAX_FRAME];
                 let m = reply.packet().encode(&mut out).unwrap();
                 reply_bytes.extend_from_slice(&out[..m]);
@@ -105,13 +125,13 @@ fn update(flash: &mut Flash, image: &[u8]) -> Status {
 /// An update's whole life: the transfer, the trial boot, the confirm (`confirmed`) or not, and the
 /// boot after (which erases the old slot, or rolls back and erases the failed one). Stops where
 /// the power fails. Returns the step count when the transfer ended (its commit word).
-fn lifecycle(flash: &mut Flash, new: &[u8], confirmed: bool) -> u32 {
-    let done = matches!(update(flash, new), Status::Done { .. });
+fn lifecycle(flash: &mut Flash, new: &[u8], confirmed: bool, unit: &Unit) -> u32 {
+    let done = matches!(update(flash, new, unit), Status::Done { .. });
     let commit = flash.steps();
     if !done || flash.is_dead() {
         return commit;
     }
-    let Some((slot, _)) = boot_run(flash) else {
+    let Some((slot, _)) = boot_run(flash, unit) else {
         return commit;
     };
     if flash.is_dead() {
@@ -120,7 +140,7 @@ fn lifecycle(flash: &mut Flash, new: &[u8], confirmed: bool) -> u32 {
     if confirmed && confirm(flash, &LAYOUT, slot).is_err() {
         return commit;
     }
-    let _ = boot_run(flash);
+    let _ = boot_run(flash, unit);
     commit
 }
 
@@ -141,20 +161,21 @@ fn cut_everywhere(
     new: &[u8],
     confirmed: bool,
     tally: &mut Tally,
+    unit: &Unit,
 ) -> u32 {
     let mut probe = before.clone();
     probe.plan(Cut::After(u32::MAX));
     // The update's own steps end with the commit word; the lifecycle then programs the trial
     // word, the confirm word (if confirmed), and erases a sector at the boot after (unless it is
     // blank already).
-    let commit = lifecycle(&mut probe, new, confirmed);
+    let commit = lifecycle(&mut probe, new, confirmed, unit);
     let steps = probe.steps();
     let trial = commit + 1;
     for k in 1..=steps {
         for cut in [Cut::After(k), Cut::Torn(k)] {
             let mut flash = before.clone();
             flash.plan(cut);
-            lifecycle(&mut flash, new, confirmed);
+            lifecycle(&mut flash, new, confirmed, unit);
             flash.power_on();
             tally.cut_points += 1;
             // The old image is in flash, whole, until the confirm word is complete.
@@ -167,7 +188,7 @@ fn cut_everywhere(
                     "{cut:?} of {steps}: the old image is gone"
                 );
             }
-            let booted = boot_run(&mut flash).map(|(_, b)| b);
+            let booted = boot_run(&mut flash, unit).map(|(_, b)| b);
             match booted.as_deref() {
                 Some(b) if Some(b) == old => tally.old += 1,
                 Some(b) if b == new => tally.new += 1,
@@ -196,8 +217,11 @@ fn cut_everywhere(
             // Now and then, the unit retries after the cut and must end on the new image.
             if k % 97 == 0 {
                 let mut retry = flash.clone();
-                let _ = lifecycle(&mut retry, new, true);
-                assert_eq!(boot_run(&mut retry).map(|(_, b)| b).as_deref(), Some(new));
+                let _ = lifecycle(&mut retry, new, true, unit);
+                assert_eq!(
+                    boot_run(&mut retry, unit).map(|(_, b)| b).as_deref(),
+                    Some(new)
+                );
             }
         }
     }
@@ -208,28 +232,35 @@ fn cut_everywhere(
 fn every_power_cut_boots_the_old_or_the_new_image() {
     let (one, two, three) = (image(1), image(2), image(3));
     let mut tally = Tally::default();
+    let unit = Unit::default();
 
     // A first update onto erased flash: a cut leaves no models or the new ones.
     let erased = Box::new(Flash::new());
-    let first_steps = cut_everywhere(&erased, None, &one, true, &mut tally);
+    let first_steps = cut_everywhere(&erased, None, &one, true, &mut tally, &unit);
 
     // A second update after the first, confirmed (slot A active, B written) …
     let mut with_one = erased.clone();
-    let _ = lifecycle(&mut with_one, &one, true);
-    assert_eq!(boot_run(&mut with_one), Some((SlotId::A, one.clone())));
-    let second_steps = cut_everywhere(&with_one, Some(&one), &two, true, &mut tally);
+    let _ = lifecycle(&mut with_one, &one, true, &unit);
+    assert_eq!(
+        boot_run(&mut with_one, &unit),
+        Some((SlotId::A, one.clone()))
+    );
+    let second_steps = cut_everywhere(&with_one, Some(&one), &two, true, &mut tally, &unit);
 
     // … its trial never confirmed: every cut, and the end, leaves the first image running …
-    let failed_steps = cut_everywhere(&with_one, Some(&one), &two, false, &mut tally);
+    let failed_steps = cut_everywhere(&with_one, Some(&one), &two, false, &mut tally, &unit);
     let mut rolled = with_one.clone();
-    let _ = lifecycle(&mut rolled, &two, false);
-    assert_eq!(boot_run(&mut rolled), Some((SlotId::A, one.clone())));
+    let _ = lifecycle(&mut rolled, &two, false, &unit);
+    assert_eq!(boot_run(&mut rolled, &unit), Some((SlotId::A, one.clone())));
 
     // … and a third (B active, A — holding the first image — erased at boot and rewritten).
     let mut with_two = with_one.clone();
-    let _ = lifecycle(&mut with_two, &two, true);
-    assert_eq!(boot_run(&mut with_two), Some((SlotId::B, two.clone())));
-    let third_steps = cut_everywhere(&with_two, Some(&two), &three, true, &mut tally);
+    let _ = lifecycle(&mut with_two, &two, true, &unit);
+    assert_eq!(
+        boot_run(&mut with_two, &unit),
+        Some((SlotId::B, two.clone()))
+    );
+    let third_steps = cut_everywhere(&with_two, Some(&two), &three, true, &mut tally, &unit);
 
     println!(
         "POWER-CUT cut_points={} steps_per_update={},{},{},{} old={} new={} empty={} mixed={}",
@@ -253,4 +284,89 @@ fn every_power_cut_boots_the_old_or_the_new_image() {
     assert_eq!(second_steps as usize, 1 + 5 + two.len().div_ceil(4) + 1 + 3);
     assert_eq!(tally.mixed, 0);
     assert!(tally.old > 0 && tally.new > 0 && tally.empty > 0);
+}
+
+/// A secret key made now from the operating system's generator (no key lives in the repository).
+fn fresh_key() -> [u8; 32] {
+    use std::io::Read;
+    let mut k = [0u8; 32];
+    std::fs::File::open("/dev/urandom")
+        .unwrap()
+        .read_exact(&mut k)
+        .unwrap();
+    k
+}
+
+/// `image` with its Ed25519 signature block by `secret`.
+fn signed(image: &[u8], secret: &[u8; 32]) -> Vec<u8> {
+    let mut buf = image.to_vec();
+    buf.resize(image.len() + BLOCK_LEN, 0);
+    sign::sign(&mut buf, secret).unwrap();
+    buf
+}
+
+/// With signature checks at boot (before a slot, its trial or its confirm is considered) and at
+/// COMMIT (before the commit word): every cut of a signed update's whole life — transfer, trial
+/// boot, confirm or not, the boot after — boots exactly the old or the new image, as the unsigned
+/// proof says; an update signed by another key is refused at COMMIT and, cut anywhere (the
+/// boot's erase of its uncommitted slot included), never runs: the old image does.
+#[test]
+fn every_power_cut_of_a_signed_update_boots_the_old_or_the_new_image() {
+    let (station, rogue) = (fresh_key(), fresh_key());
+    let unit = Unit {
+        keys: Some(sign::public_key(&station).to_vec()),
+    };
+    let (one, two, bad) = (
+        signed(&image(4), &station),
+        signed(&image(5), &station),
+        signed(&image(6), &rogue),
+    );
+    let mut tally = Tally::default();
+    let mut with_one = Box::new(Flash::new());
+    let _ = lifecycle(&mut with_one, &one, true, &unit);
+    assert_eq!(
+        boot_run(&mut with_one, &unit),
+        Some((SlotId::A, one.clone()))
+    );
+    let confirmed_steps = cut_everywhere(&with_one, Some(&one), &two, true, &mut tally, &unit);
+    let failed_steps = cut_everywhere(&with_one, Some(&one), &two, false, &mut tally, &unit);
+
+    // The rogue image: refused at COMMIT with its reason; then every cut of that session and of
+    // the boot after it (which erases the uncommitted slot) runs the old image.
+    let mut probe = with_one.clone();
+    assert_eq!(
+        update(&mut probe, &bad, &unit),
+        Status::Failed(Failure::Unit(Reason::BadSignature))
+    );
+    assert_eq!(boot_run(&mut probe, &unit), Some((SlotId::A, one.clone())));
+    let rogue_steps = probe.steps();
+    let mut rogue_old = 0u32;
+    for k in 1..=rogue_steps {
+        for cut in [Cut::After(k), Cut::Torn(k)] {
+            let mut flash = with_one.clone();
+            flash.plan(cut);
+            let _ = update(&mut flash, &bad, &unit);
+            let _ = boot_run(&mut flash, &unit);
+            flash.power_on();
+            assert_eq!(
+                boot_run(&mut flash, &unit),
+                Some((SlotId::A, one.clone())),
+                "{cut:?} of the rogue update's {rogue_steps} steps"
+            );
+            rogue_old += 1;
+        }
+    }
+    println!(
+        "POWER-CUT-SIGNED cut_points={} steps_per_update={},{} old={} new={} mixed={} rogue_cut_points={} rogue_booted=0",
+        tally.cut_points,
+        confirmed_steps,
+        failed_steps,
+        tally.old,
+        tally.new,
+        tally.mixed,
+        rogue_old
+    );
+    assert_eq!(tally.cut_points, 2 * (confirmed_steps + failed_steps));
+    assert_eq!(tally.mixed, 0);
+    assert!(tally.old > 0 && tally.new > 0);
 }

@@ -42,6 +42,13 @@ fn validate(flash: &mut Flash, offset: u32, len: u32) -> bool {
         .is_some_and(|b| Image::parse(b).is_ok())
 }
 
+/// [`validate`] as the receiver's check before the commit.
+fn check(flash: &mut Flash, offset: u32, len: u32) -> Result<(), Reason> {
+    validate(flash, offset, len)
+        .then_some(())
+        .ok_or(Reason::Invalid)
+}
+
 fn booted(flash: &mut Flash) -> Option<(SlotId, u32, Vec<u8>)> {
     let a = select(flash, &LAYOUT, validate).unwrap()?;
     let at = a.payload(&LAYOUT) as usize;
@@ -70,7 +77,7 @@ impl Unit {
         let mut replies = Vec::new();
         for &b in bytes {
             if let Some(p) = self.decoder.push(b) {
-                replies.push(self.rx.handle(&mut self.flash, &p, b"SN-0042", validate));
+                replies.push(self.rx.handle(&mut self.flash, &p, b"SN-0042", check));
             }
         }
         replies
@@ -85,8 +92,13 @@ impl Unit {
     }
 
     fn begin(&mut self, image: &[u8]) -> Reply {
+        self.begin_session(image, 1)
+    }
+
+    fn begin_session(&mut self, image: &[u8], session: u32) -> Reply {
         let mut p = (image.len() as u32).to_le_bytes().to_vec();
         p.extend_from_slice(&tcomp_core::blob::crc32(image).to_le_bytes());
+        p.extend_from_slice(&session.to_le_bytes());
         self.send(Kind::Begin, 1, &p)
     }
 
@@ -224,11 +236,12 @@ fn an_oversize_image_is_refused_before_anything_is_erased() {
     let before = unit.flash.bytes().to_vec();
     let mut p = (LAYOUT.capacity() + 1).to_le_bytes().to_vec();
     p.extend_from_slice(&0u32.to_le_bytes());
+    p.extend_from_slice(&1u32.to_le_bytes());
     nak(unit.send(Kind::Begin, 1, &p), Reason::TooLarge);
     assert_eq!(unit.flash.bytes(), &before[..]);
     // The sender refuses it itself once it has the unit's capacity.
     let big = vec![0u8; LAYOUT.capacity() as usize + 1];
-    let mut tx = Sender::new(&big);
+    let mut tx = Sender::new(&big, 1);
     let mut out = [0u8; MAX_FRAME];
     let n = tx.request(&mut out).unwrap();
     for r in unit.feed(&out[..n]) {
@@ -243,18 +256,95 @@ fn an_oversize_image_is_refused_before_anything_is_erased() {
 }
 
 #[test]
-fn a_begin_with_other_parameters_during_an_update_is_refused() {
+fn a_begin_of_another_session_takes_over_a_failed_one() {
     let (a, b) = (image(8, 400), image(9, 500));
     let mut unit = Unit::boot(Flash::new());
-    unit.begin(&a);
+    unit.begin_session(&a, 1);
     unit.data(&a, 0);
-    nak(unit.begin(&b), Reason::Busy);
-    // ABORT, then the other image goes through.
-    assert_eq!(unit.send(Kind::Abort, 5, &[]).kind(), Kind::Ack);
-    assert_eq!(unit.begin(&b).kind(), Kind::Ack);
+    unit.data(&a, MAX_CHUNK);
+    // The first session's host died mid-transfer; a new run sends another image.
+    assert_eq!(unit.begin_session(&b, 2).kind(), Kind::Ack);
+    // Its chunks start at 0 again: nothing of the first session's image is kept.
+    nak(unit.data(&b, MAX_CHUNK), Reason::OutOfOrder);
     unit.send_all(&b);
     assert_eq!(unit.send(Kind::Commit, 3, &[]).reason(), Reason::Ok);
     assert_eq!(booted(&mut unit.flash).unwrap().2, b);
+}
+
+#[test]
+fn a_new_session_with_the_same_image_starts_over_and_a_repeat_does_not() {
+    let a = image(8, 400);
+    let mut unit = Unit::boot(Flash::new());
+    unit.begin_session(&a, 7);
+    unit.data(&a, 0);
+    // A repeat of session 7's BEGIN (its ACK was lost) keeps the chunk written.
+    assert_eq!(unit.begin_session(&a, 7).kind(), Kind::Ack);
+    assert_eq!(unit.data(&a, MAX_CHUNK).kind(), Kind::Ack);
+    // Session 8 with the same image begins the slot again.
+    assert_eq!(unit.begin_session(&a, 8).kind(), Kind::Ack);
+    let reply = unit.data(&a, 2 * MAX_CHUNK);
+    nak(reply, Reason::OutOfOrder);
+    assert_eq!(expected_offset(reply), 0);
+}
+
+#[test]
+fn abort_ends_a_session_and_keeps_the_active_slot() {
+    let (old, new) = (image(3, 400), image(4, 500));
+    let mut unit = unit_with(&old);
+    unit.begin(&new);
+    unit.data(&new, 0);
+    assert_eq!(unit.send(Kind::Abort, 5, &[]).kind(), Kind::Ack);
+    nak(unit.data(&new, MAX_CHUNK), Reason::NotStarted);
+    nak(unit.send(Kind::Commit, 3, &[]), Reason::NotStarted);
+    assert_eq!(booted(&mut unit.flash), Some((SlotId::A, 1, old)));
+    // The sender's ABORT: sent after BEGIN, it ends the update as aborted.
+    let mut tx = Sender::new(&new, 9);
+    let mut out = [0u8; MAX_FRAME];
+    for _ in 0..2 {
+        let n = tx.request(&mut out).unwrap();
+        for r in unit.feed(&out[..n]) {
+            tx.on_reply(&r.packet());
+        }
+    }
+    assert!(tx.holds_session());
+    tx.abort();
+    let n = tx.request(&mut out).unwrap();
+    assert_eq!(out[2], Kind::Abort as u8);
+    for r in unit.feed(&out[..n]) {
+        tx.on_reply(&r.packet());
+    }
+    assert_eq!(tx.status(), Status::Failed(Failure::Aborted));
+    assert!(tx.request(&mut out).is_none());
+    assert!(!unit.rx.is_receiving());
+}
+
+#[test]
+fn a_refusal_before_the_commit_carries_the_validators_reason() {
+    let new = image(5, 300);
+    let mut unit = Unit::boot(Flash::new());
+    unit.begin(&new);
+    unit.send_all(&new);
+    let mut out = [0u8; MAX_FRAME];
+    let n = Packet {
+        kind: Kind::Commit,
+        seq: 3,
+        payload: &[],
+    }
+    .encode(&mut out)
+    .unwrap();
+    let mut replies = Vec::new();
+    for &b in &out[..n] {
+        if let Some(p) = unit.decoder.push(b) {
+            replies.push(unit.rx.handle(&mut unit.flash, &p, b"SN", |_, _, _| {
+                Err(Reason::BadSignature)
+            }));
+        }
+    }
+    assert_eq!(
+        (replies[0].kind(), replies[0].reason()),
+        (Kind::Result, Reason::BadSignature)
+    );
+    assert!(booted(&mut unit.flash).is_none());
 }
 
 #[test]
@@ -297,6 +387,7 @@ fn an_image_that_fails_validation_or_its_crc_leaves_the_active_slot_untouched() 
     let new = image(12, 400);
     let mut p = (new.len() as u32).to_le_bytes().to_vec();
     p.extend_from_slice(&(tcomp_core::blob::crc32(&new) ^ 1).to_le_bytes());
+    p.extend_from_slice(&1u32.to_le_bytes());
     assert_eq!(unit.send(Kind::Begin, 1, &p).kind(), Kind::Ack);
     unit.send_all(&new);
     assert_eq!(unit.send(Kind::Commit, 3, &[]).reason(), Reason::Crc);
@@ -309,7 +400,7 @@ fn an_image_that_fails_validation_or_its_crc_leaves_the_active_slot_untouched() 
 fn the_sender_recovers_from_a_lossy_link_carrying_output_frames() {
     let (old, new) = (image(13, 500), image(14, 1200));
     let mut unit = unit_with(&old);
-    let mut tx = Sender::new(&new);
+    let mut tx = Sender::new(&new, 1);
     let mut host = Decoder::new();
     let mut out = [0u8; MAX_FRAME];
     let mut sequence = 0u32;
@@ -377,7 +468,7 @@ fn the_sender_recovers_from_a_lossy_link_carrying_output_frames() {
 #[test]
 fn a_silent_unit_times_the_sender_out() {
     let img = image(1, 100);
-    let mut tx = Sender::new(&img);
+    let mut tx = Sender::new(&img, 1);
     for _ in 0..=tcomp_core::update::sender::MAX_RETRIES {
         assert!(matches!(tx.status(), Status::Running { .. }));
         tx.on_timeout();

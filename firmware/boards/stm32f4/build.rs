@@ -28,6 +28,17 @@ fn main() -> Result<(), Box<dyn Error>> {
     }
     let name = board.to_uppercase().replace('-', "_");
     let rtds = rtd_table(&description)?;
+    // The UART's rate is the description's `[link] baud`, generated once as `wiring::NAME_BAUD`.
+    if tcomp_board_description::Board::load(&description)?
+        .baud
+        .is_none()
+    {
+        return Err(format!(
+            "{}: no `[link] baud`: this board's UART takes its rate from the description",
+            description.display()
+        )
+        .into());
+    }
     fs::write(
         out.join("board_config.rs"),
         format!(
@@ -35,6 +46,8 @@ fn main() -> Result<(), Box<dyn Error>> {
              pub const CONFIG: &[tcomp_firmware::app::ChannelConfig] = &tcomp_firmware::wiring::{name};\n\
              /// Its board hash: an image made for another description loads no model.\n\
              pub const CONFIG_HASH: u64 = tcomp_firmware::wiring::{name}_HASH;\n\
+             /// Its link's baud rate (`[link] baud`): USART1 runs at it.\n\
+             pub const LINK_BAUD: u32 = tcomp_firmware::wiring::{name}_BAUD;\n\
              /// The RTD of each thermometer of `{board}.toml`, in its order (converter k, AIN0/AIN1).\n\
              pub const RTDS: &[tcomp_hal::rtd::Rtd] = &[{rtds}];\n"
         ),

@@ -200,7 +200,9 @@ impl<S: SampleIo> SampleTask<S> {
             STATS.dropped_frames.fetch_add(1, Ordering::Relaxed);
         }
         let next = number.wrapping_add(1);
-        if (next % u64::from(REPORT_PERIODS)) == 0 {
+        // Every 10 s, and at once when an update has ended (its outcome is then on the link
+        // while the host still listens).
+        if (next % u64::from(REPORT_PERIODS)) == 0 || crate::update::take_report_due() {
             self.send_report(next as u32, enqueue);
         }
         match self.liveness.check(DRAIN_BEAT.count(), UPDATE_BEAT.count()) {
@@ -225,11 +227,12 @@ impl<S: SampleIo> SampleTask<S> {
         self.io.after(&period);
     }
 
-    /// Sends the boot report, stamped with the sequence number of the next data frame. Not
+    /// Sends the boot report, stamped with the sequence number of the next data frame and the last
+    /// update's outcome ([`crate::boot::stamp`]). Not
     /// inlined, so its buffer is not in the sample task's frame.
     #[inline(never)]
     pub fn send_report(&mut self, sequence: u32, enqueue: &mut dyn FnMut(&[u8]) -> bool) {
-        self.report.sequence = sequence;
+        crate::boot::stamp(&mut self.report, sequence);
         let mut bytes = [0u8; MAX_FRAME_LEN];
         if let Some(len) = self.report.encode(&mut bytes)
             && !enqueue(bytes.get(..len).unwrap_or(&[]))

@@ -8,13 +8,14 @@ use super::{
     RESET_REQUESTED, RESET_STATE, STATS, UPDATE_ACTIVE, UPDATE_BEAT, UPDATE_STATE,
 };
 use crate::app::{App, ChannelConfig, LoadError, MAX_CHANNELS, status};
-use crate::image::check_unit;
-use crate::slots::{MappedFlash, RunTime, confirm, validates};
+use crate::slots::{MappedFlash, RunTime, confirm};
+use crate::trust::{Signer, Trust};
 use crate::update::{MAX_REPLY, UpdateTask, serial_text};
 use core::sync::atomic::Ordering;
 use embedded_storage::nor_flash::NorFlash;
 use tcomp_core::frame::BootReport;
 use tcomp_core::slots::{Active, Layout, SlotId};
+use tcomp_core::update::Reason;
 
 /// A board's model flash: the `MODELS` region (offsets from its start), programmable, and mapped.
 pub trait ModelFlash: NorFlash + MappedFlash {}
@@ -37,6 +38,13 @@ pub struct Boot {
     /// The running image's bytes (the active slot's payload; empty without one). Never written
     /// while the unit runs: an update writes only the other slot.
     pub image: &'static [u8],
+    /// Who vouches for the running image (`None` without one).
+    pub signer: Option<Signer>,
+    /// Why the last image the boot considered was refused by the trust check, if one was.
+    pub refused: Option<Reason>,
+    /// The unit's key store (`crate::trust`): the board's OTP blocks, or QEMU's `KEYS` region.
+    /// An update is checked against it at COMMIT, as the boot checked the running image.
+    pub keys: &'static [u8],
     /// The slot the update receiver must treat as active.
     pub active: Option<Active>,
     /// The model slots.
@@ -108,7 +116,7 @@ pub struct Update<Rx: RxSource, F: ModelFlash> {
     flash: RunTime<F>,
     task: UpdateTask,
     serial: [u8; 18],
-    unit: u64,
+    trust: Trust<'static>,
     layout: Layout,
     /// The slot on trial, until it is confirmed.
     trial: Option<SlotId>,
@@ -131,14 +139,16 @@ impl<Rx: RxSource, F: ModelFlash> Update<Rx, F> {
             );
             self.trial = None;
         }
-        let unit = self.unit;
+        let trust = self.trust;
         let mut reply = [0u8; MAX_REPLY];
         while let Some(byte) = self.rx.pop() {
-            // The new image must read and be made for this unit: an image for another unit is
-            // refused before the commit, so the unit keeps its models.
+            // The new image must pass the unit's trust check (it reads, it is made for this
+            // unit, it is signed by a provisioned key, and nothing follows its signature) before
+            // the commit word is written: a refused image is never committed, the unit keeps its
+            // models and the RESULT says why.
             let validate = |f: &mut RunTime<F>, off: u32, len: u32| {
                 f.mapped(off, len)
-                    .is_some_and(|b| validates(b, 0, len) && check_unit(b, unit).is_ok())
+                    .map_or(Err(Reason::Flash), |b| trust.check_payload(b).map(|_| ()))
             };
             if let Some(n) =
                 self.task
@@ -242,7 +252,7 @@ pub fn init<S: SampleIo, Tx: SerialTx, R, Rx: RxSource, F: ModelFlash>(
             flash: RunTime::new(flash),
             task: UpdateTask::new(boot.layout, boot.active),
             serial: serial_text(boot.unit),
-            unit: boot.unit,
+            trust: Trust::new(boot.unit, boot.keys),
             layout: boot.layout,
             trial: boot.trial.then_some(boot.active.map(|a| a.slot)).flatten(),
         },
@@ -279,6 +289,8 @@ fn load(app: &mut App<'static>, boot: &Boot) -> [Result<(), LoadError>; MAX_CHAN
 fn report(boot: &Boot, loaded: &[Result<(), LoadError>; MAX_CHANNELS]) -> BootReport {
     let report = crate::boot::report(
         boot.image,
+        boot.signer,
+        boot.refused,
         boot.unit,
         boot.config,
         loaded,

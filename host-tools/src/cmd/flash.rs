@@ -7,32 +7,52 @@
 //! frames keep arriving on the same link: [`link::transfer`] decodes them beside the replies and
 //! reports how many came and whether any were lost. The new image takes effect at the unit's next
 //! reset (the running models are not swapped under the loop).
+//!
+//! The baud rate is the board description's (`--board FILE`, its `[link] baud`): the one number
+//! the board binary's UART is built with, so the tool cannot open the port at another rate than
+//! the unit's. `--baud` is for a description without `[link]` (a design no board binary runs yet)
+//! or a link that is not the unit's own (a pty). The reply timeout follows from the baud rate;
+//! each run draws a new session number, so its BEGIN takes over whatever a failed run left open.
 
 pub mod link;
 
 use anyhow::{Context, bail};
-use clap::Args as ClapArgs;
+use clap::{ArgGroup, Args as ClapArgs};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Duration;
+use tcomp_board_description::Board;
+use tcomp_core::frame::{DEVELOPMENT, image_state, update_state};
 use tcomp_core::image::Image;
-use tcomp_core::update::Status;
+use tcomp_core::update::wire::MAX_FRAME;
+use tcomp_core::update::{Reason, Status};
 use tcomp_train::progress::{Progress, Unit};
 
 /// Arguments of `tcomp flash`.
 #[derive(ClapArgs)]
+#[command(group(ArgGroup::new("rate").required(true).args(["board", "baud"])))]
 pub struct Args {
     /// The image written by `tcomp image`.
     pub image: PathBuf,
     /// The unit's serial port (e.g. /dev/ttyUSB0, or the pty QEMU names).
     #[arg(long)]
     pub port: PathBuf,
-    /// The link's baud rate.
-    #[arg(long, default_value_t = 115_200)]
-    pub baud: u32,
-    /// Milliseconds to wait for a reply before sending a request again.
-    #[arg(long, default_value_t = 500)]
-    pub timeout_ms: u64,
+    /// The unit's board description (firmware/descriptions/*.toml): the port runs at its
+    /// `[link] baud`, the rate the board binary is built with, and the image must be made for it.
+    #[arg(long, value_name = "FILE")]
+    pub board: Option<PathBuf>,
+    /// The link's baud rate, instead of a description's (a description without `[link]`, or a
+    /// link that is not the unit's own UART).
+    #[arg(long, conflicts_with = "board")]
+    pub baud: Option<u32>,
+    /// Milliseconds to wait for a reply before sending a request again (default: 50 ms plus
+    /// twice the time of a full transmit queue of the unit at the baud rate: 62 ms at 921,600).
+    #[arg(long)]
+    pub timeout_ms: Option<u64>,
+    /// Milliseconds to wait for the answer to COMMIT (the unit reads the image back and checks
+    /// it and its signature first).
+    #[arg(long, default_value_t = 3000)]
+    pub commit_timeout_ms: u64,
     /// Print the result as JSON.
     #[arg(long)]
     pub json: bool,
@@ -41,14 +61,70 @@ pub struct Args {
     pub quiet: bool,
 }
 
+/// Bytes the unit may have queued ahead of a reply: the STM32F407 board's 512-byte transmit
+/// queue, plus a request and its reply on the wire.
+const QUEUED_BYTES: u64 = 512 + 2 * MAX_FRAME as u64;
+
+/// The reply timeout at `baud` (8N1: ten bits a byte): 50 ms for the host's side (a USB serial
+/// adapter's latency timer is 16 ms, the scheduler's a few) and twice the time of
+/// [`QUEUED_BYTES`].
+pub fn reply_timeout(baud: u32) -> Duration {
+    let queue_us = QUEUED_BYTES * 10 * 1_000_000 / u64::from(baud.max(1));
+    Duration::from_millis(50) + Duration::from_micros(2 * queue_us)
+}
+
+/// A session number for this run: the clock's nanoseconds mixed with the process id, so two runs
+/// (even two at once on two ports) do not share one.
+fn session() -> u32 {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos());
+    (nanos as u32) ^ (nanos >> 32) as u32 ^ std::process::id().rotate_left(16)
+}
+
+/// The baud rate: the description's (and the image must be made for its board), or `--baud`.
+fn baud(args: &Args, image: &Image<'_>) -> anyhow::Result<u32> {
+    let Some(path) = &args.board else {
+        return args
+            .baud
+            .context("give --board FILE (its [link] baud) or --baud");
+    };
+    let board = Board::load(path)?;
+    if let Some(h) = image.header()
+        && h.board_hash != board.hash()
+    {
+        bail!(
+            "{}: made for board hash {:016x}, not for --board {} ({}, hash {:016x}); nothing sent",
+            args.image.display(),
+            h.board_hash,
+            path.display(),
+            super::printable::text(&board.name),
+            board.hash()
+        );
+    }
+    board.baud.with_context(|| {
+        format!(
+            "--board {}: the description has no [link] baud (give --baud)",
+            path.display()
+        )
+    })
+}
+
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let image =
         std::fs::read(&args.image).with_context(|| format!("reading {}", args.image.display()))?;
-    Image::parse(&image)
+    let parsed = Image::parse(&image)
         .with_context(|| format!("{}: not a model image, nothing sent", args.image.display()))?;
+    let baud = baud(args, &parsed)?;
+    let timing = link::Timing {
+        reply: args
+            .timeout_ms
+            .map_or_else(|| reply_timeout(baud), Duration::from_millis),
+        commit: Duration::from_millis(args.commit_timeout_ms),
+    };
     let port_name = args.port.to_string_lossy().into_owned();
-    let mut port = serialport::new(&port_name, args.baud)
+    let mut port = serialport::new(&port_name, baud)
         .timeout(Duration::from_millis(20))
         .open()
         .with_context(|| format!("--port {port_name}: cannot open"))?;
@@ -57,25 +133,54 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .with_context(|| format!("--port {port_name}: cannot clear its input"))?;
     let bar = super::progress::Bar::new(args.quiet || args.json);
     bar.start("sending", image.len() as u64, Unit::Bytes);
-    let outcome = link::transfer(
-        &mut port,
-        &image,
-        Duration::from_millis(args.timeout_ms),
-        |sent, _| bar.set(u64::from(sent)),
-    )
+    let outcome = link::transfer(&mut port, &image, session(), timing, |sent, _| {
+        bar.set(u64::from(sent))
+    })
     .with_context(|| format!("--port {port_name}"))?;
     bar.clear();
     let info = outcome.info;
     let serial = info.map(|i| String::from_utf8_lossy(i.serial()).into_owned());
+    let slot_name = |i: u8| if i == 0 { "A" } else { "B" };
+    let unit_report = outcome.report.map(|r| {
+        json!({
+            "image_state": image_state::name(r.image_state),
+            "signer": (r.signer != 0).then(|| format!("{:016x}", r.signer)),
+            "development_build": r.flags & DEVELOPMENT != 0,
+            "last_update": update_state::name(r.update),
+            "last_update_reason": (r.update == update_state::REFUSED
+                || r.update == update_state::FAILED)
+                .then(|| Reason::from_u8(r.update_reason).describe()),
+        })
+    });
     let (slot, generation) = match outcome.status {
         Status::Done { slot, generation } => (slot, generation),
-        Status::Failed(why) => bail!("--port {port_name}: update failed: {why}"),
+        Status::Failed(why) => {
+            if args.json {
+                let value = json!({
+                    "port": port_name,
+                    "baud": baud,
+                    "image": args.image.display().to_string(),
+                    "serial": serial,
+                    "result": "failed",
+                    "reason": why.to_string(),
+                    "aborted": outcome.aborted,
+                    "unit_report": unit_report,
+                });
+                outln!("{}", serde_json::to_string_pretty(&value)?);
+            }
+            if outcome.aborted {
+                bail!(
+                    "--port {port_name}: update failed: {why} (session aborted; the unit keeps its models)"
+                );
+            }
+            bail!("--port {port_name}: update failed: {why} (the unit keeps its models)");
+        }
         Status::Running { .. } => bail!("--port {port_name}: the update did not finish"),
     };
-    let slot_name = |i: u8| if i == 0 { "A" } else { "B" };
     if args.json {
         let value = json!({
             "port": port_name,
+            "baud": baud,
             "image": args.image.display().to_string(),
             "bytes": image.len(),
             "serial": serial,
@@ -89,6 +194,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "output_lost": outcome.output.lost,
             "output_first_sequence": outcome.first_sequence,
             "output_last_sequence": outcome.last_sequence,
+            "unit_report": unit_report,
         });
         outln!("{}", serde_json::to_string_pretty(&value)?);
     } else {

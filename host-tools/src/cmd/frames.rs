@@ -9,7 +9,11 @@ use clap::Args as ClapArgs;
 use serde_json::json;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use tcomp_core::frame::{BootReport, Decoder, Frame, Item, Stats, image_state, status};
+use tcomp_core::frame::{
+    BootReport, DEVELOPMENT, Decoder, Frame, Item, Stats, WATCHDOG, image_state, status,
+    update_state,
+};
+use tcomp_core::update::Reason;
 
 /// Arguments of `tcomp frames`.
 #[derive(ClapArgs)]
@@ -53,14 +57,7 @@ fn stats_json(s: &Stats) -> serde_json::Value {
 
 /// A boot report: the unit, the image it runs and each channel's model state.
 fn report_json(r: &BootReport) -> serde_json::Value {
-    let image_state = match r.image_state {
-        image_state::OK => "ok",
-        image_state::NONE => "no image",
-        image_state::OTHER_UNIT => "made for another unit",
-        image_state::INVALID => "invalid",
-        image_state::TABLE => "channel table refused by the board",
-        _ => "unknown",
-    };
+    let image_state = image_state::name(r.image_state);
     // The firmware's `LoadError::code`.
     let model = |s: u8| match s {
         0 => "loaded",
@@ -83,7 +80,12 @@ fn report_json(r: &BootReport) -> serde_json::Value {
         "image_state": image_state,
         "board_hash": format!("{:016x}", r.board_hash),
         "image_crc": format!("{:08x}", r.image_crc),
-        "watchdog_reset": r.flags & 1 != 0,
+        "watchdog_reset": r.flags & WATCHDOG != 0,
+        "development_build": r.flags & DEVELOPMENT != 0,
+        "signer": (r.signer != 0).then(|| format!("{:016x}", r.signer)),
+        "last_update": update_state::name(r.update),
+        "last_update_reason": (r.update != update_state::NONE && r.update != update_state::COMMITTED)
+            .then(|| Reason::from_u8(r.update_reason).describe()),
         "channels": r.channels().iter().map(|c| json!({
             "id": c.id, "state": c.state, "model": model(c.state),
         })).collect::<Vec<_>>(),

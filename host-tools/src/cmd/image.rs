@@ -1,7 +1,9 @@
 //! `tcomp image --board FILE --serial N --model ID=FILE.tcm … --out models.bin`: the calibration
-//! image the firmware reads from its `MODELS` flash region (0x003F_0000, 64 KiB), flashed on its own
-//! without rebuilding the firmware, e.g.
-//! `probe-rs download --binary-format bin --base-address 0x3F0000 models.bin`.
+//! image a unit runs from one of its two model slots, sent with `tcomp flash` or written bare at
+//! the start of the board's `MODELS` region by a probe, without rebuilding the firmware, e.g.
+//! `probe-rs download --binary-format bin --base-address 0x080C0000 models.bin` on the STM32F407
+//! board. The addresses in the help come from one table (`tcomp_board_description::targets`),
+//! checked against the firmware's memory maps.
 //!
 //! The layout is `tcomp_core::image`'s (documented there), written by its `ImageSpec::write`: the
 //! firmware reads the image with the same module, so the two sides cannot disagree. Before
@@ -12,12 +14,27 @@
 use anyhow::{Context, bail};
 use clap::Args as ClapArgs;
 use std::path::{Path, PathBuf};
-use tcomp_core::image::{Entry, Fnv64, ImageSpec, MAX_ENTRIES, Mismatch, Provenance};
+use tcomp_core::image::{Entry, Fnv64, ImageSpec, MAX_ENTRIES, Mismatch, Provenance, sign};
 
-use tcomp_board_description::Board;
+use tcomp_board_description::{Board, targets};
 
-/// Size of the firmware's `MODELS` region.
-const REGION_BYTES: usize = 64 * 1024;
+/// The largest image any board's slot holds (its capacity: the slot less its header).
+fn largest_slot_capacity() -> usize {
+    targets::TARGETS
+        .iter()
+        .map(|t| t.slot_bytes as usize - tcomp_core::slots::PAYLOAD_AT as usize)
+        .max()
+        .unwrap_or(0)
+}
+
+/// `tcomp image`'s one-line help: what the image is and where it goes, with each board's address.
+pub fn about() -> String {
+    format!(
+        "Pack model blobs, checked against a board description, into a unit's calibration image: \
+         sent with `tcomp flash`, or written bare by a probe at the MODELS region ({})",
+        targets::probe_addresses()
+    )
+}
 
 /// Arguments of `tcomp image`.
 #[derive(ClapArgs)]
@@ -36,6 +53,10 @@ pub struct Args {
     /// image can be rebuilt bit for bit.
     #[arg(long, value_name = "SECONDS")]
     pub created: Option<u64>,
+    /// Sign the image with this secret key (`tcomp keygen`'s PREFIX.key): units run only images
+    /// signed by a key they were provisioned with.
+    #[arg(long, value_name = "KEY")]
+    pub sign: Option<PathBuf>,
     /// Where to write the image.
     #[arg(long)]
     pub out: PathBuf,
@@ -56,6 +77,8 @@ struct ImageJson {
     board: String,
     board_hash: String,
     serial: u64,
+    /// The signing key's id, or null for an unsigned image.
+    signer: Option<String>,
     channels: Vec<ChannelJson>,
 }
 
@@ -297,12 +320,21 @@ pub fn build(
         entries: &entries,
     };
     let len = spec.image_len()?;
-    if len > REGION_BYTES {
-        bail!("the image is {len} bytes, more than the {REGION_BYTES}-byte MODELS region");
+    let capacity = largest_slot_capacity();
+    if len > capacity {
+        bail!("the image is {len} bytes, more than a model slot holds ({capacity} bytes)");
     }
     let mut image = vec![0u8; len];
     spec.write(&mut image)?;
     Ok(image)
+}
+
+/// Appends the signature block (`tcomp_core::image::sign`) to `image`; returns the key id.
+pub fn sign_image(image: &mut Vec<u8>, secret: &[u8; 32]) -> anyhow::Result<sign::KeyId> {
+    let len = image.len();
+    image.resize(len + sign::BLOCK_LEN, 0);
+    sign::sign(image, secret)?;
+    Ok(sign::KeyId::of(&sign::public_key(secret)))
 }
 
 /// Runs the command.
@@ -317,12 +349,24 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         blobs.push(read_model_arg(spec)?);
         build(&board, args.serial, 0, &blobs)?;
     }
-    let image = build(&board, args.serial, created(args)?, &blobs)?;
+    let secret = args
+        .sign
+        .as_deref()
+        .map(super::keygen::read_secret)
+        .transpose()?;
+    let mut image = build(&board, args.serial, created(args)?, &blobs)?;
+    let signer = match &secret {
+        Some(secret) => Some(sign_image(&mut image, secret)?),
+        None => None,
+    };
     let mut inputs: Vec<(&str, &Path)> = blobs
         .iter()
         .map(|l| ("--model", l.path.as_path()))
         .collect();
     inputs.push(("--board", args.board.as_path()));
+    if let Some(key) = &args.sign {
+        inputs.push(("--sign", key.as_path()));
+    }
     super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
     super::output::check_file_output("--out", &args.out)?;
     tcomp_train::blob_io::write_atomic(&args.out, &image)?;
@@ -337,6 +381,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             board: board.name.clone(),
             board_hash: format!("{:016x}", board.hash()),
             serial: args.serial,
+            signer: signer.map(|k| k.to_string()),
             channels: blobs
                 .iter()
                 .map(|b| ChannelJson {
@@ -351,13 +396,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         return Ok(());
     }
     outln!(
-        "wrote {} ({} bytes, {} models for board {} (hash {:016x}), unit {}): flash it at 0x003F0000",
+        "wrote {} ({} bytes, {} models for board {} (hash {:016x}), unit {}, {}): send it with `tcomp flash`, or write it bare at {}",
         args.out.display(),
         image.len(),
         blobs.len(),
         super::printable::text(&board.name),
         board.hash(),
-        args.serial
+        args.serial,
+        signer.map_or("unsigned".to_string(), |k| format!("signed by key {k}")),
+        targets::probe_addresses()
     );
     Ok(())
 }

@@ -19,13 +19,23 @@ pub struct Args {
     /// Print JSON instead of the human summary.
     #[arg(long)]
     pub json: bool,
+    /// A public key (`tcomp keygen`'s PREFIX.pub) to verify an image's signature against
+    /// (repeatable: a unit's key store); a signature that does not verify fails the command.
+    #[arg(long = "key", value_name = "PUB")]
+    pub keys: Vec<PathBuf>,
 }
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    // The keys first: a bad --key is named whatever the file holds.
+    let keys = args
+        .keys
+        .iter()
+        .map(|k| super::keygen::read_public(k))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let bytes = tcomp_train::blob_io::read(&args.model)?;
     if bytes.starts_with(&tcomp_core::image::MAGIC) {
-        return super::inspect_image::run(&args.model, &bytes, args.json);
+        return super::inspect_image::run(&args.model, &bytes, args.json, &keys);
     }
     let m = tcomp_train::blob_io::decode(&args.model, &bytes)?;
     if args.json {

@@ -7,6 +7,7 @@
 //! elsewhere, and its strings must not drive the terminal.
 use serde_json::{Value, json};
 use std::path::Path;
+use tcomp_core::image::sign::{self, KeyStore, SignatureError};
 use tcomp_core::image::{ChannelRow, Image, Source, ThermKind};
 
 use super::printable::text;
@@ -46,8 +47,38 @@ fn therm_kind(k: ThermKind) -> String {
     }
 }
 
+/// The signature: who signed (key id), and whether it verifies against the given keys (`null`
+/// when none was given).
+fn signature(bytes: &[u8], keys: &[[u8; 32]]) -> Value {
+    let block = match sign::block(bytes) {
+        Ok((_, Some(b))) => b,
+        Ok((_, None)) => return json!({"signed": false, "key_id": null, "verified": null}),
+        Err(e) => {
+            return json!({"signed": true, "key_id": null, "verified": false, "reason": e.to_string()});
+        }
+    };
+    if keys.is_empty() {
+        return json!({"signed": true, "key_id": block.key.to_string(), "verified": null});
+    }
+    let store = keys.concat();
+    let (verified, reason) = match sign::verify(bytes, KeyStore(&store)) {
+        Ok(_) => (true, None),
+        Err(e @ (SignatureError::UnknownKey(_) | SignatureError::BadSignature(_))) => {
+            (false, Some(e.to_string()))
+        }
+        Err(e) => (false, Some(e.to_string())),
+    };
+    json!({
+        "signed": true,
+        "key_id": block.key.to_string(),
+        "verified": verified,
+        "reason": reason,
+        "keys": keys.iter().map(|k| sign::KeyId::of(k).to_string()).collect::<Vec<_>>(),
+    })
+}
+
 /// The whole image as JSON (what `--json` prints; the human summary is drawn from it).
-fn describe(file: &Path, bytes: &[u8], image: &Image<'_>) -> Value {
+fn describe(file: &Path, bytes: &[u8], image: &Image<'_>, keys: &[[u8; 32]]) -> Value {
     let header = image.header().map(|h| {
         json!({
             "serial": h.serial,
@@ -103,6 +134,7 @@ fn describe(file: &Path, bytes: &[u8], image: &Image<'_>) -> Value {
         "bytes": bytes.len(),
         "version": image.version(),
         "header": header,
+        "signature": signature(bytes, keys),
         "thermometers": thermometers,
         "channels": channels,
         "entries": image.len(),
@@ -110,16 +142,24 @@ fn describe(file: &Path, bytes: &[u8], image: &Image<'_>) -> Value {
 }
 
 /// Prints the image in `bytes` (already known to start with the image magic).
-pub fn run(file: &Path, bytes: &[u8], json_out: bool) -> anyhow::Result<()> {
+pub fn run(file: &Path, bytes: &[u8], json_out: bool, keys: &[[u8; 32]]) -> anyhow::Result<()> {
     let image = Image::parse(bytes)
         .map_err(|e| anyhow::anyhow!("{}: not a valid calibration image: {e}", file.display()))?;
-    let v = describe(file, bytes, &image);
+    let v = describe(file, bytes, &image, keys);
+    let failed = v["signature"]["verified"] == Value::Bool(false);
+    let verdict = || {
+        anyhow::anyhow!(
+            "{}: the signature does not verify against --key: {}",
+            file.display(),
+            v["signature"]["reason"].as_str().unwrap_or("")
+        )
+    };
     if json_out {
         outln!(
             "{}",
             super::printable::json(&serde_json::to_string_pretty(&v)?)
         );
-        return Ok(());
+        return if failed { Err(verdict()) } else { Ok(()) };
     }
     outln!(
         "{}: valid tcomp calibration image, format version {}, {} bytes, {} models",
@@ -201,6 +241,25 @@ pub fn run(file: &Path, bytes: &[u8], json_out: bool) -> anyhow::Result<()> {
                 blob.len()
             );
         }
+    }
+    let sig = &v["signature"];
+    let line = match (
+        sig["signed"].as_bool(),
+        sig["key_id"].as_str(),
+        &sig["verified"],
+    ) {
+        (Some(false), ..) => "unsigned (a unit runs it only in a development build)".to_string(),
+        (_, Some(id), Value::Null) => format!("signed by key {id} (not verified: give --key PUB)"),
+        (_, Some(id), Value::Bool(true)) => format!("signed by key {id}: verified against --key"),
+        (_, id, _) => format!(
+            "signed by key {}: DOES NOT VERIFY ({})",
+            id.unwrap_or("?"),
+            sig["reason"].as_str().unwrap_or("")
+        ),
+    };
+    outln!("signature    {line}");
+    if failed {
+        return Err(verdict());
     }
     Ok(())
 }

@@ -31,6 +31,7 @@ pub mod image;
 pub mod inspect;
 mod inspect_image;
 pub mod json;
+pub mod keygen;
 pub mod output;
 pub mod printable;
 pub mod progress;

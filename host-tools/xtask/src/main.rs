@@ -6,7 +6,8 @@
 //! * `cargo xtask board` — only the board binary's build and sizes.
 //! * `cargo xtask smoke` — only the QEMU smoke run.
 //! * `cargo xtask power-cut` — the model slots' power-loss test (a power cut after and inside every
-//!   write step of three updates); prints its `POWER-CUT` line.
+//!   write step of three updates); prints its `POWER-CUT` line, and `POWER-CUT-SIGNED` (the
+//!   same with signature checks, and an update signed by another key).
 //! * `cargo xtask ffi`   — the C API's examples: a host C program against `tcomp eval`, a
 //!   bare-metal C program under QEMU against the host, bit for bit (see `ffi/mod.rs`).
 //! * `cargo xtask python` — the Python wheel built, installed into a fresh virtual environment,
@@ -227,6 +228,15 @@ fn power_cut() -> Result<()> {
     let cut_points = field(line, "cut_points=").context("no cut_points in the POWER-CUT line")?;
     if !out.status.success() || field(line, "mixed=") != Some(0) || cut_points == 0 {
         bail!("power-loss test failed ({})", out.status);
+    }
+    // The same proof with signature checks at boot and at COMMIT, and a rogue-signed update.
+    let signed = text
+        .lines()
+        .find(|l| l.starts_with("POWER-CUT-SIGNED "))
+        .context("the power-loss test printed no POWER-CUT-SIGNED line")?;
+    println!("{signed}");
+    if field(signed, "mixed=") != Some(0) || field(signed, "rogue_booted=") != Some(0) {
+        bail!("signed power-loss test failed: {signed}");
     }
     Ok(())
 }

@@ -147,9 +147,14 @@ fn fit_models(work: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The unit's key store, written by `tcomp keygen` beside the images in the work directory and
+/// loaded into the QEMU board's `KEYS` region (`firmware/boards/qemu/memory.x`) as a factory
+/// programs OTP.
+pub const KEY_STORE: &str = "station.otp";
+
 /// QEMU's mps2-an386 running the replay ELF `elf` with `image` loaded at the start of the models
-/// region (slot A) and `vector` in the replay region, UART 0 on `serial` (`file:PATH`, `pty`), one
-/// instruction per 8 ns of virtual time.
+/// region (slot A), the key store at `KEYS` and `vector` in the replay region, UART 0 on `serial`
+/// (`file:PATH`, `pty`), one instruction per 8 ns of virtual time.
 pub fn qemu_command(elf: &Path, image: &Path, vector: &Path, serial: &str) -> Command {
     let mut qemu = Command::new("qemu-system-arm");
     qemu.args([
@@ -178,6 +183,11 @@ pub fn qemu_command(elf: &Path, image: &Path, vector: &Path, serial: &str) -> Co
     .arg(format!(
         "loader,file={},addr=0x21000000,force-raw=on",
         vector.display()
+    ))
+    .arg("-device")
+    .arg(format!(
+        "loader,file={},addr=0x3EF000,force-raw=on",
+        image.with_file_name(KEY_STORE).display()
     ));
     qemu
 }
@@ -269,6 +279,14 @@ fn make_images(root: &Path, work: &Path) -> Result<Images> {
     let descriptions = root.join("firmware/descriptions");
     let imu6_board = descriptions.join("imu6-rlg-qma.toml");
     let ifog_board = descriptions.join("ifog1.toml");
+    // The station's key, made now (no key lives in the repository), and a second one that the
+    // unit was not provisioned with.
+    for prefix in ["station", "rogue"] {
+        for ext in ["key", "pub", "otp"] {
+            let _ = std::fs::remove_file(work.join(format!("{prefix}.{ext}")));
+        }
+        tcomp(work, &["keygen", "--out", prefix])?;
+    }
     let mut model_args: Vec<String> = vec!["image".into(), "--board".into()];
     model_args.push(imu6_board.to_str().context("path")?.into());
     for (id, m) in ["rlg-x", "rlg-y", "rlg-z", "qma-x", "qma-y", "qma-z"]
@@ -283,10 +301,19 @@ fn make_images(root: &Path, work: &Path) -> Result<Images> {
         "--created".into(),
         "0".into(),
     ]);
+    let mut rogue_args = model_args.clone();
+    model_args.extend(["--sign".into(), "station.key".into()]);
     model_args.extend(["--out".into(), "models.bin".into()]);
     tcomp(
         work,
         &model_args.iter().map(String::as_str).collect::<Vec<_>>(),
+    )?;
+    // The same image signed by the key the unit does not hold: the update must refuse it.
+    rogue_args.extend(["--sign".into(), "rogue.key".into()]);
+    rogue_args.extend(["--out".into(), "models-rogue.bin".into()]);
+    tcomp(
+        work,
+        &rogue_args.iter().map(String::as_str).collect::<Vec<_>>(),
     )?;
     let ifog_board = ifog_board.to_str().context("path")?;
     tcomp(
@@ -301,6 +328,8 @@ fn make_images(root: &Path, work: &Path) -> Result<Images> {
             &serial,
             "--created",
             "0",
+            "--sign",
+            "station.key",
             "--out",
             "models-ifog.bin",
         ],
@@ -319,6 +348,10 @@ fn make_images(root: &Path, work: &Path) -> Result<Images> {
     let at = blob.as_ptr() as usize - image.as_ptr() as usize + blob.len() / 2;
     corrupt[at] ^= 0x10;
     tcomp_core::image::seal(&mut corrupt).map_err(|e| anyhow::anyhow!("image: {e:?}"))?;
+    // Signed again by the station (as a station would sign an image holding a bad blob): the
+    // signature passes and the blob's own CRC is what refuses the channel.
+    tcomp_core::image::sign::sign(&mut corrupt, &station_secret(work)?)
+        .map_err(|e| anyhow::anyhow!("signing: {e}"))?;
     std::fs::write(work.join("models-corrupt.bin"), &corrupt)?;
 
     Ok(Images {
@@ -326,6 +359,17 @@ fn make_images(root: &Path, work: &Path) -> Result<Images> {
         ifog: ifog_image,
         corrupt,
     })
+}
+
+/// The station's secret key, as `tcomp keygen` wrote it (`tcomp-ed25519-secret` and 64 hex digits).
+fn station_secret(work: &Path) -> Result<[u8; 32]> {
+    let text = std::fs::read_to_string(work.join("station.key"))?;
+    let hex = text.split_whitespace().nth(1).context("station.key")?;
+    let mut key = [0u8; 32];
+    for (i, k) in key.iter_mut().enumerate() {
+        *k = u8::from_str_radix(hex.get(2 * i..2 * i + 2).context("station.key")?, 16)?;
+    }
+    Ok(key)
 }
 
 /// What the three replay runs add up to.
@@ -463,6 +507,7 @@ fn update_run(work: &Path, elf: &Path, imu: &mut Inputs, corrupt: &[u8]) -> Resu
         elf,
         &work.join("models-corrupt.bin"),
         &vector_d,
+        &work.join("models-rogue.bin"),
         &work.join("models.bin"),
         d.hash,
         d.served.iter().filter(|&&s| s).count(),

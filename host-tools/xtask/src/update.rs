@@ -7,6 +7,14 @@
 //! update writes slot B (`0x003F_8000`) and commits it; when the vector ends the firmware resets
 //! (SYSRESETREQ). QEMU then loads the ELF, the vector and slot A's bare image again, but slot B
 //! survives in RAM, so the next boot must choose slot B, generation 1, and load all six models.
+//!
+//! Before it, the same image signed by a key the unit was not provisioned with is sent: the unit
+//! must refuse it at COMMIT (RESULT `UnknownKey`), keep running its models (the boot's records
+//! stay bit-exact) and say so in the boot report it sends at once (last update refused, and why).
+//! The refused session leaves slot B written, and nothing erases while the loop runs: the good
+//! image's first BEGIN is refused (`flash error`), the unit resets once that reply has left, its
+//! boot erases slot B before the watchdog starts, and `tcomp flash` is run again (as a user
+//! would); that boot replays the vector from its start, compared bit for bit as before.
 
 use crate::field;
 use crate::proc::{self, Bounded};
@@ -24,39 +32,46 @@ use std::time::Duration;
 const REPLY_TIMEOUT_MS: &str = "3000";
 /// The whole `tcomp flash`: about 1 s of wall time for a 6-channel image.
 const FLASH_LIMIT: Duration = proc::minutes(4);
+/// The unit's reset after it refused a BEGIN whose slot needs the boot's erase.
+const RESET_WAIT: Duration = Duration::from_secs(2);
 /// QEMU naming its pty: at once.
 const PTY_LIMIT: Duration = Duration::from_secs(30);
 
 /// Runs the update; `vector` is an IMU6 vector without injected board faults built for
 /// `initial` (its expected outputs and `hash`), `samples` the records it serves; `update` is the
-/// image sent.
+/// image sent, after `rogue` (signed by another key) is refused.
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     work: &Path,
     elf: &Path,
     initial: &Path,
     vector: &Path,
+    rogue: &Path,
     update: &Path,
     hash: u32,
     samples: usize,
 ) -> Result<()> {
     let (mut qemu, stdout, pty) = start_qemu(elf, initial, vector)?;
     let log = proc::collect(stdout);
-    let flash = proc::output(
-        Command::new(work.join("../debug/tcomp"))
-            .args([
-                "flash",
-                "--port",
-                &pty,
-                "--json",
-                "--timeout-ms",
-                REPLY_TIMEOUT_MS,
-            ])
-            .arg(update),
-        "`tcomp flash` over QEMU's pty",
-        FLASH_LIMIT,
-    )?;
-    let report = String::from_utf8_lossy(&flash.stdout).into_owned();
+    refused(work, &pty, rogue)?;
+    let mut flash = flash(work, &pty, update, "`tcomp flash` over QEMU's pty")?;
+    let mut report = String::from_utf8_lossy(&flash.stdout).into_owned();
     print!("{report}");
+    if !flash.status.success() && report.contains("the unit refused: flash error") {
+        // The refused session left slot B written, and nothing erases while the loop runs: the
+        // unit refused the BEGIN and resets once the refusal has left, its boot erases slot B
+        // (before the watchdog starts), and the second attempt goes through. That boot starts
+        // the vector again, compared as the first boot's was.
+        println!(
+            "update after the refused one: the unit resets to erase slot B at boot; sending again"
+        );
+        // Its reset and boot take milliseconds of guest time; waiting generously keeps the second
+        // run from seeing the first boot's last frames (their sequence numbers start again).
+        std::thread::sleep(RESET_WAIT);
+        flash = self::flash(work, &pty, update, "`tcomp flash` over QEMU's pty, again")?;
+        report = String::from_utf8_lossy(&flash.stdout).into_owned();
+        print!("{report}");
+    }
     // The firmware holds its loop until the update commits, then ends its run; if `tcomp flash`
     // failed, QEMU is killed when `qemu` is dropped.
     if !flash.status.success() || !report.contains("\"result\": \"ok\"") {
@@ -117,6 +132,57 @@ pub fn run(
         summary.dropped
     );
     Ok(())
+}
+
+/// `tcomp flash` of an image signed by a key the unit does not hold: refused before the commit,
+/// with the reason in the RESULT and in the unit's boot report, which still names its image.
+fn refused(work: &Path, pty: &str, rogue: &Path) -> Result<()> {
+    let out = flash(
+        work,
+        pty,
+        rogue,
+        "`tcomp flash` of an image signed by another key",
+    )?;
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    print!("{text}");
+    let held = "image signed by a key this unit does not hold";
+    let says = |k: &str, v: &str| text.contains(&format!("\"{k}\": \"{v}"));
+    if out.status.success()
+        || !says("result", "failed")
+        || !says("reason", &format!("the unit refused: {held}"))
+        || !says("last_update", "refused")
+        || !says("last_update_reason", held)
+        || !says("image_state", "ok")
+    {
+        bail!("the image signed by another key was not refused as it should be: {text}");
+    }
+    println!(
+        "update with an image signed by another key: refused before the commit ({held}); the unit's boot report says so, and its image is still the one it ran"
+    );
+    Ok(())
+}
+
+/// `tcomp flash --json` of `image` over `pty`, at the description's baud, bounded.
+fn flash(work: &Path, pty: &str, image: &Path, what: &str) -> Result<std::process::Output> {
+    proc::output(
+        Command::new(work.join("../debug/tcomp"))
+            .args([
+                "flash",
+                "--port",
+                pty,
+                "--json",
+                "--timeout-ms",
+                REPLY_TIMEOUT_MS,
+                "--board",
+            ])
+            .arg(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../firmware/descriptions/imu6-rlg-qma.toml"
+            ))
+            .arg(image),
+        what,
+        FLASH_LIMIT,
+    )
 }
 
 /// Starts the replay firmware under QEMU (bounded) with its UART on a pty; returns QEMU, its

@@ -11,7 +11,7 @@
 //! ```text
 //! offset    size  field
 //! 0         2     sync word 0xEB 0x90
-//! 2         1     kind and version: 0x81 (boot report, version 1)
+//! 2         1     kind and version: 0x82 (boot report, version 2)
 //! 3         1     channel count K (0..=8)
 //! 4         4     sequence number of the next data frame (the report does not consume one)
 //! 8         8     the unit's serial
@@ -19,25 +19,41 @@
 //! 24        8     the image's board-description hash (0 without one)
 //! 32        4     the image's whole-image CRC (0 without one)
 //! 36        2     image format version (0: no image)
-//! 38        1     image state (0 ok, 1 no image, 2 made for another unit, 3 invalid, 4 its
-//!                 channel table refused by this board)
-//! 39        1     flags: bit 0 the boot followed a watchdog reset
-//! 40        3·K   per channel: channel id u16, model state u8 (0 loaded, else the reason, see
+//! 38        1     image state (see [`image_state`]: 0 ok, 1 no image, 2 made for another unit,
+//!                 3 invalid, 4 its channel table refused by this board, 5 unsigned, 6 signed
+//!                 by a key the unit does not hold, 7 its signature does not verify)
+//! 39        1     flags: bit 0 the boot followed a watchdog reset; bit 1 a development build
+//!                 that runs unsigned images ([`DEVELOPMENT`])
+//! 40        8     the signer's key id, u64 (`sign::KeyId::as_u64`: the same 16 hex digits; 0: unsigned
+//!                 or none)
+//! 48        1     the last update since boot (see [`update_state`]: 0 none, 1 committed, runs
+//!                 from the next reset, 2 refused, 3 failed)
+//! 49        1     its reason: the update protocol's `Reason` code (0 when committed or none)
+//! 50        3·K   per channel: channel id u16, model state u8 (0 loaded, else the reason, see
 //!                 the firmware's `LoadError::code`)
-//! 40 + 3K   4     CRC-32 of bytes 2 .. 40 + 3K
+//! 50 + 3K   4     CRC-32 of bytes 2 .. 50 + 3K
 //! ```
+//!
+//! Version 1 (0x81) had no key id and no update outcome (header 40 bytes); it is not read.
+//! A refused update shows in every report until the next reset, so a user who looks at the unit
+//! after a refused `tcomp flash` sees why, and that it still runs its old image.
 
 use super::{MAX_CHANNELS, SYNC, le_u32, le_u64};
 use crate::blob::crc32;
 
 /// The version byte of a boot report (the data frames' is 1).
-pub const BOOT_VERSION: u8 = 0x81;
+pub const BOOT_VERSION: u8 = 0x82;
 /// How often the firmware repeats the report, seconds. Ten seconds: a user attaching a terminal
 /// sees it within the time it takes to look at the screen, and at 200 Hz it costs one 64-byte
 /// frame per 2,000 data frames (0.04 % of the link).
 pub const BOOT_REPORT_PERIOD_S: u32 = 10;
 /// Bytes before the channels.
-pub const BOOT_HEADER_LEN: usize = 40;
+pub const BOOT_HEADER_LEN: usize = 50;
+/// Flag bit: the boot followed a watchdog reset.
+pub const WATCHDOG: u8 = 1;
+/// Flag bit: a development build, which runs unsigned images (chosen at build time; every
+/// report of such a unit says so).
+pub const DEVELOPMENT: u8 = 2;
 /// Bytes per channel.
 pub const BOOT_CHANNEL_LEN: usize = 3;
 
@@ -58,6 +74,58 @@ pub mod image_state {
     pub const INVALID: u8 = 3;
     /// The image's channel table does not fit this board.
     pub const TABLE: u8 = 4;
+    /// The image is not signed (and this build runs signed images only).
+    pub const UNSIGNED: u8 = 5;
+    /// The image is signed by a key the unit does not hold.
+    pub const UNKNOWN_KEY: u8 = 6;
+    /// The image's signature does not verify.
+    pub const BAD_SIGNATURE: u8 = 7;
+    /// Every state with its name (what `tcomp frames` prints).
+    pub const NAMES: [(u8, &str); 8] = [
+        (OK, "ok"),
+        (NONE, "no image"),
+        (OTHER_UNIT, "made for another unit"),
+        (INVALID, "invalid"),
+        (TABLE, "channel table refused by the board"),
+        (UNSIGNED, "not signed"),
+        (UNKNOWN_KEY, "signed by a key the unit does not hold"),
+        (BAD_SIGNATURE, "signature does not verify"),
+    ];
+
+    /// The name of `state` (`"unknown"` for a code this build does not know).
+    pub fn name(state: u8) -> &'static str {
+        NAMES
+            .iter()
+            .find(|(c, _)| *c == state)
+            .map_or("unknown", |(_, n)| n)
+    }
+}
+
+/// The last update since boot, as a boot report carries it.
+pub mod update_state {
+    /// No update since boot.
+    pub const NONE: u8 = 0;
+    /// An image was committed: it runs from the next reset.
+    pub const COMMITTED: u8 = 1;
+    /// The unit refused the image before committing it (the reason byte says why).
+    pub const REFUSED: u8 = 2;
+    /// The update failed on the unit's side (flash error, CRC after writing).
+    pub const FAILED: u8 = 3;
+    /// Every state with its name.
+    pub const NAMES: [(u8, &str); 4] = [
+        (NONE, "none"),
+        (COMMITTED, "committed"),
+        (REFUSED, "refused"),
+        (FAILED, "failed"),
+    ];
+
+    /// The name of `state`.
+    pub fn name(state: u8) -> &'static str {
+        NAMES
+            .iter()
+            .find(|(c, _)| *c == state)
+            .map_or("unknown", |(_, n)| n)
+    }
 }
 
 /// One channel's line of a boot report.
@@ -86,8 +154,14 @@ pub struct BootReport {
     pub image_version: u16,
     /// [`image_state`].
     pub image_state: u8,
-    /// Bit 0: watchdog reset.
+    /// [`WATCHDOG`], [`DEVELOPMENT`].
     pub flags: u8,
+    /// The signer's key id (`sign::KeyId::as_u64`; 0: unsigned or no image).
+    pub signer: u64,
+    /// [`update_state`] of the last update since boot.
+    pub update: u8,
+    /// Its reason (the update protocol's `Reason` code).
+    pub update_reason: u8,
     channels: [ChannelState; MAX_CHANNELS],
     count: u8,
 }
@@ -103,6 +177,9 @@ impl BootReport {
         image_version: 0,
         image_state: 0,
         flags: 0,
+        signer: 0,
+        update: 0,
+        update_reason: 0,
         channels: [ChannelState { id: 0, state: 0 }; MAX_CHANNELS],
         count: 0,
     };
@@ -137,6 +214,8 @@ impl BootReport {
         w.put(&self.image_crc.to_le_bytes());
         w.put(&self.image_version.to_le_bytes());
         w.put(&[self.image_state, self.flags]);
+        w.put(&self.signer.to_le_bytes());
+        w.put(&[self.update, self.update_reason]);
         for c in self.channels() {
             w.put(&c.id.to_le_bytes());
             w.put(&[c.state]);
@@ -165,6 +244,9 @@ impl BootReport {
             image_version: u16::from_le_bytes([*bytes.get(36)?, *bytes.get(37)?]),
             image_state: *bytes.get(38)?,
             flags: *bytes.get(39)?,
+            signer: le_u64(bytes, 40)?,
+            update: *bytes.get(48)?,
+            update_reason: *bytes.get(49)?,
             ..Self::default()
         };
         for (i, c) in r.channels.iter_mut().enumerate().take(k) {

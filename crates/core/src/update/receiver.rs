@@ -6,12 +6,19 @@
 //! ever erases and writes the slot the unit is not running from, and commits only through
 //! [`SlotWriter::commit`], so whatever the host sends, the active slot stays as it was.
 //!
-//! Requests are idempotent where a lost reply makes the host repeat them: a repeated BEGIN with
-//! the same length and CRC, and a DATA chunk that lies wholly inside what is already written, are
-//! acknowledged again without touching the flash; a COMMIT after a successful one repeats its
-//! RESULT. After a commit the unit refuses a new BEGIN until it is reset: the new image takes
-//! effect at the next boot (the running models borrow from the active slot, which the next update
-//! would have to erase).
+//! Requests are idempotent where a lost reply makes the host repeat them: a repeated BEGIN of the
+//! same session with the same length and CRC, and a DATA chunk that lies wholly inside what is
+//! already written, are acknowledged again without touching the flash; a COMMIT after a successful
+//! one repeats its RESULT. A BEGIN of another session (a new run of `tcomp flash` after one that
+//! died mid-transfer, or another image) takes over: the half-written slot is begun again, so a
+//! failed session never leaves the unit refusing updates until a reset. ABORT ends a session
+//! without touching the active slot. After a commit the unit refuses a new BEGIN until it is
+//! reset: the new image takes effect at the next boot (the running models borrow from the active
+//! slot, which the next update would have to erase).
+//!
+//! The image check before the commit is the caller's (`validate`): it answers with the [`Reason`]
+//! the host is told (an image that does not parse, made for another unit, unsigned, signed by an
+//! unknown key, with a signature that does not verify), so a refusal says why.
 
 use super::wire::{Kind, MAX_SERIAL, Packet, Reason};
 use crate::slots::writer::WriteError;
@@ -95,7 +102,8 @@ impl Reply {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
     Idle,
-    Receiving(SlotWriter),
+    /// Writing, for the session numbered as the BEGIN said.
+    Receiving(SlotWriter, u32),
     Committed(SlotId, u32),
 }
 
@@ -119,7 +127,7 @@ impl Receiver {
 
     /// True while an image is being received.
     pub const fn is_receiving(&self) -> bool {
-        matches!(self.state, State::Receiving(_))
+        matches!(self.state, State::Receiving(..))
     }
 
     /// The slot and generation committed by this receiver, if any.
@@ -136,13 +144,14 @@ impl Receiver {
     }
 
     /// Handles one request; `serial` is the unit's serial number (bytes, at most [`MAX_SERIAL`]
-    /// sent), `validate(flash, offset, len)` the image check run before the commit.
+    /// sent), `validate(flash, offset, len)` the image check run before the commit (after the
+    /// read-back CRC), `Err` with the reason the RESULT carries.
     pub fn handle<F: NorFlash>(
         &mut self,
         flash: &mut F,
         request: &Packet<'_>,
         serial: &[u8],
-        validate: impl FnOnce(&mut F, u32, u32) -> bool,
+        validate: impl FnOnce(&mut F, u32, u32) -> Result<(), Reason>,
     ) -> Reply {
         let seq = request.seq;
         match request.kind {
@@ -182,20 +191,24 @@ impl Receiver {
 
     fn begin<F: NorFlash>(&mut self, flash: &mut F, request: &Packet<'_>) -> Reply {
         let seq = request.seq;
-        let (Some(length), Some(crc), 8) =
-            (request.u32_at(0), request.u32_at(4), request.payload.len())
-        else {
+        let (Some(length), Some(crc), Some(session), 12) = (
+            request.u32_at(0),
+            request.u32_at(4),
+            request.u32_at(8),
+            request.payload.len(),
+        ) else {
             return Reply::nak(seq, Reason::Malformed, 0);
         };
         match self.state {
             State::Committed(..) => return Reply::nak(seq, Reason::RebootPending, 0),
-            State::Receiving(w) => {
+            State::Receiving(w, open) => {
                 let h = w.header();
-                return if h.length == length && h.payload_crc == crc {
-                    Reply::ack(seq)
-                } else {
-                    Reply::nak(seq, Reason::Busy, w.written())
-                };
+                if open == session && h.length == length && h.payload_crc == crc {
+                    // A repeat (its ACK was lost): nothing is erased again.
+                    return Reply::ack(seq);
+                }
+                // Another session takes over: the slot is begun again below.
+                self.state = State::Idle;
             }
             State::Idle => {}
         }
@@ -215,7 +228,7 @@ impl Receiver {
         };
         match SlotWriter::begin(flash, self.layout, self.target(), header) {
             Ok(w) => {
-                self.state = State::Receiving(w);
+                self.state = State::Receiving(w, session);
                 Reply::ack(seq)
             }
             Err(e) => {
@@ -227,8 +240,8 @@ impl Receiver {
 
     fn data<F: NorFlash>(&mut self, flash: &mut F, request: &Packet<'_>) -> Reply {
         let seq = request.seq;
-        let mut writer = match self.state {
-            State::Receiving(w) => w,
+        let (mut writer, session) = match self.state {
+            State::Receiving(w, session) => (w, session),
             State::Committed(..) => return Reply::nak(seq, Reason::RebootPending, 0),
             State::Idle => return Reply::nak(seq, Reason::NotStarted, 0),
         };
@@ -245,7 +258,7 @@ impl Receiver {
         }
         match writer.write(flash, offset, chunk) {
             Ok(()) => {
-                self.state = State::Receiving(writer);
+                self.state = State::Receiving(writer, session);
                 Reply::ack(seq)
             }
             Err(WriteError::Flash(_)) => {
@@ -260,10 +273,10 @@ impl Receiver {
         &mut self,
         flash: &mut F,
         seq: u16,
-        validate: impl FnOnce(&mut F, u32, u32) -> bool,
+        validate: impl FnOnce(&mut F, u32, u32) -> Result<(), Reason>,
     ) -> Reply {
         let writer = match self.state {
-            State::Receiving(w) => w,
+            State::Receiving(w, _) => w,
             State::Committed(slot, generation) => {
                 return Reply::result(seq, Reason::Ok, slot, generation);
             }
@@ -273,10 +286,23 @@ impl Receiver {
             return Reply::nak(seq, Reason::Incomplete, writer.written());
         }
         let (slot, generation) = (writer.slot(), writer.header().generation);
-        match writer.commit(flash, validate) {
+        // The writer takes a yes or no; the reason of a no is kept here for the RESULT.
+        let mut refused = Reason::Invalid;
+        let check = |f: &mut F, offset, len| match validate(f, offset, len) {
+            Ok(()) => true,
+            Err(why) => {
+                refused = why;
+                false
+            }
+        };
+        match writer.commit(flash, check) {
             Ok(()) => {
                 self.state = State::Committed(slot, generation);
                 Reply::result(seq, Reason::Ok, slot, generation)
+            }
+            Err(WriteError::Invalid) => {
+                self.state = State::Idle;
+                Reply::result(seq, refused, slot, generation)
             }
             Err(e) => {
                 self.state = State::Idle;

@@ -7,13 +7,23 @@
 //! reply to the first copy still counts; the receiver treats the repeat as idempotent. A NAK that
 //! names the offset the unit expects (a lost or reordered chunk, a COMMIT before all data) moves
 //! the sender there; any other NAK or a failed RESULT ends the update.
+//!
+//! Each sender carries a session number (the caller draws it, e.g. from the clock): a BEGIN of a
+//! new session takes over whatever an earlier, failed run left open on the unit. A sender that
+//! gives up while the unit holds its session can say so with [`Sender::abort`] (ABORT; the unit's
+//! active slot is untouched either way).
 
 use super::wire::{Kind, MAX_CHUNK, MAX_FRAME, MAX_SERIAL, Packet, Reason};
 use crate::blob::crc32;
 use crate::slots::SlotId;
 
-/// Timeouts in a row on one request before the sender gives up.
-pub const MAX_RETRIES: u32 = 8;
+/// Timeouts in a row on one request before the sender gives up. With the reply timeout derived
+/// from the link's speed (`tcomp flash`: 62 ms at 921,600 baud) a dead link fails within
+/// 33 timeouts (under 3 s); at 1 % byte loss a 75-byte DATA frame and its 11-byte ACK both arrive
+/// with probability 0.99^86 = 0.42, so 33 failures in a row on one chunk have probability
+/// 0.58^33 ≈ 1.5·10⁻⁸ (with 8 retries it was 0.58^9 = 0.7 %, per chunk: most updates of a few
+/// hundred chunks failed).
+pub const MAX_RETRIES: u32 = 32;
 
 /// What the unit said about itself (its INFO reply).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -87,6 +97,8 @@ pub enum Failure {
         /// The unit's slot capacity.
         capacity: u32,
     },
+    /// The host gave up the session (ABORT, whether or not the unit acknowledged it).
+    Aborted,
 }
 
 impl core::fmt::Display for Failure {
@@ -94,6 +106,7 @@ impl core::fmt::Display for Failure {
         match self {
             Self::Unit(r) => write!(f, "the unit refused: {r}"),
             Self::Timeout => write!(f, "no reply after {MAX_RETRIES} retries"),
+            Self::Aborted => write!(f, "aborted by the host"),
             Self::TooLarge { capacity } => {
                 write!(
                     f,
@@ -110,6 +123,8 @@ enum Step {
     Begin,
     Data(u32),
     Commit,
+    /// ABORT sent after `why` (the failure reported once it is answered or times out).
+    Abort(Failure),
     End(Status),
 }
 
@@ -118,6 +133,7 @@ enum Step {
 pub struct Sender<'a> {
     image: &'a [u8],
     crc: u32,
+    session: u32,
     step: Step,
     seq: u16,
     retries: u32,
@@ -125,20 +141,25 @@ pub struct Sender<'a> {
     info: Option<Info>,
     /// Total timeouts and NAK-driven rewinds, for the report.
     repeats: u32,
+    aborted: bool,
 }
 
 impl<'a> Sender<'a> {
-    /// An update of `image` (checked by the caller), starting with HELLO.
-    pub fn new(image: &'a [u8]) -> Self {
+    /// An update of `image` (checked by the caller) in session `session`, starting with HELLO.
+    /// Two runs should not share a session number (a unit still holding the first would take the
+    /// second's BEGIN for a repeat).
+    pub fn new(image: &'a [u8], session: u32) -> Self {
         Self {
             image,
             crc: crc32(image),
+            session,
             step: Step::Hello,
             seq: 1,
             retries: 0,
             sent: 0,
             info: None,
             repeats: 0,
+            aborted: false,
         }
     }
 
@@ -183,7 +204,8 @@ impl<'a> Sender<'a> {
             Step::Begin => {
                 payload[..4].copy_from_slice(&self.len().to_le_bytes());
                 payload[4..8].copy_from_slice(&self.crc.to_le_bytes());
-                (Kind::Begin, 8)
+                payload[8..12].copy_from_slice(&self.session.to_le_bytes());
+                (Kind::Begin, 12)
             }
             Step::Data(offset) => {
                 let chunk = self.chunk(offset);
@@ -192,6 +214,7 @@ impl<'a> Sender<'a> {
                 (Kind::Data, 4 + chunk.len())
             }
             Step::Commit => (Kind::Commit, 0),
+            Step::Abort(_) => (Kind::Abort, 0),
             Step::End(_) => return None,
         };
         Packet {
@@ -214,9 +237,40 @@ impl<'a> Sender<'a> {
         self.retries = 0;
     }
 
+    /// True while the unit may hold this sender's session open (BEGIN sent, no outcome yet).
+    pub const fn holds_session(&self) -> bool {
+        matches!(self.step, Step::Data(_) | Step::Commit)
+    }
+
+    /// Gives the session up: the next request is ABORT when the unit may hold it open, and the
+    /// update ends as [`Failure::Aborted`] (or as the failure that made the caller abort, passed
+    /// through [`Sender::abort_after`]).
+    pub fn abort(&mut self) {
+        self.abort_after(Failure::Aborted);
+    }
+
+    /// [`Sender::abort`], reporting `why` as the outcome.
+    pub fn abort_after(&mut self, why: Failure) {
+        match self.step {
+            Step::Begin | Step::Data(_) | Step::Commit => {
+                self.aborted = true;
+                self.advance(Step::Abort(why));
+            }
+            Step::Hello => self.step = Step::End(Status::Failed(why)),
+            Step::Abort(_) | Step::End(_) => {}
+        }
+    }
+
     /// Takes a reply; one for another request is ignored.
     pub fn on_reply(&mut self, reply: &Packet<'_>) {
         if reply.seq != self.seq || matches!(self.step, Step::End(_)) {
+            return;
+        }
+        if let Step::Abort(why) = self.step {
+            // ACK or a NAK (no session open any more): the session is over either way.
+            if matches!(reply.kind, Kind::Ack | Kind::Nak) {
+                self.advance(Step::End(Status::Failed(why)));
+            }
             return;
         }
         let reason = Reason::from_u8(reply.payload.first().copied().unwrap_or(0xFF));
@@ -268,15 +322,37 @@ impl<'a> Sender<'a> {
         self.advance(next);
     }
 
-    /// No reply in time: the same request goes again, until [`MAX_RETRIES`].
+    /// No reply in time: the same request goes again, until [`MAX_RETRIES`]. An unanswered
+    /// ABORT is given up after one timeout (the link is likely gone; the unit's next BEGIN takes
+    /// over anyway).
     pub fn on_timeout(&mut self) {
-        if matches!(self.step, Step::End(_)) {
-            return;
+        match self.step {
+            Step::End(_) => return,
+            Step::Abort(why) => {
+                self.step = Step::End(Status::Failed(why));
+                return;
+            }
+            _ => {}
         }
         self.retries += 1;
         self.repeats += 1;
         if self.retries > MAX_RETRIES {
-            self.step = Step::End(Status::Failed(Failure::Timeout));
+            // Giving up while the unit may hold the session: say so (one try).
+            self.abort_after(Failure::Timeout);
+            if !matches!(self.step, Step::Abort(_)) {
+                self.step = Step::End(Status::Failed(Failure::Timeout));
+            }
         }
+    }
+
+    /// True once an ABORT has been the current request.
+    pub const fn aborted(&self) -> bool {
+        self.aborted
+    }
+
+    /// True when the current request is COMMIT: the unit then reads the whole slot back and checks
+    /// the image (and its signature) before it answers, so a caller waits longer for it.
+    pub const fn is_committing(&self) -> bool {
+        matches!(self.step, Step::Commit)
     }
 }

@@ -10,7 +10,9 @@
 //! 7+len   4     CRC-32 (the core's) of bytes 2 .. 7+len
 //! ```
 //!
-//! Payloads (little-endian): BEGIN = total length u32, image CRC-32 u32; DATA = offset u32, then
+//! Payloads (little-endian): BEGIN = total length u32, image CRC-32 u32, session u32 (a number
+//! the host draws per run of `tcomp flash`: a repeat of this run's BEGIN is acknowledged again, a
+//! BEGIN of another session takes over); DATA = offset u32, then
 //! 1..=[`MAX_CHUNK`] bytes; NAK = reason u8 (see [`Reason`]), expected offset u32; RESULT = reason
 //! u8 (0 ok), slot u8, generation u32; INFO = active slot u8 (0xFF: none), generation u32, slot
 //! capacity u32, then the unit's serial (≤ [`MAX_SERIAL`] bytes). HELLO, COMMIT, ABORT and ACK
@@ -46,7 +48,8 @@ pub const MAX_SERIAL: usize = 32;
 pub enum Kind {
     /// Host: who are you (reply INFO).
     Hello = 0x01,
-    /// Host: an image of this length and CRC follows (erases the inactive slot).
+    /// Host: an image of this length and CRC follows (erases the inactive slot); a BEGIN of a new
+    /// session ends whatever session the unit had open.
     Begin = 0x02,
     /// Host: image bytes at an offset.
     Data = 0x03,
@@ -94,8 +97,7 @@ pub enum Reason {
     Malformed = 1,
     /// DATA or COMMIT without a BEGIN.
     NotStarted = 2,
-    /// BEGIN with other parameters during an update (ABORT first).
-    Busy = 3,
+    // 3 was `Busy` (a BEGIN during another session); a new session now takes over.
     /// The image does not fit a slot.
     TooLarge = 4,
     /// DATA not at the next offset (the NAK says which).
@@ -112,6 +114,14 @@ pub enum Reason {
     Flash = 10,
     /// An update was committed: the next one waits for the reset that activates it.
     RebootPending = 11,
+    /// The image was made for another unit (its serial).
+    OtherUnit = 12,
+    /// The image carries no signature, and this firmware accepts signed images only.
+    Unsigned = 13,
+    /// The image is signed by a key the unit does not hold.
+    UnknownKey = 14,
+    /// The image's signature does not verify against the key it names.
+    BadSignature = 15,
 }
 
 impl Reason {
@@ -120,7 +130,6 @@ impl Reason {
         match b {
             0 => Self::Ok,
             2 => Self::NotStarted,
-            3 => Self::Busy,
             4 => Self::TooLarge,
             5 => Self::OutOfOrder,
             6 => Self::BadChunk,
@@ -129,6 +138,10 @@ impl Reason {
             9 => Self::Invalid,
             10 => Self::Flash,
             11 => Self::RebootPending,
+            12 => Self::OtherUnit,
+            13 => Self::Unsigned,
+            14 => Self::UnknownKey,
+            15 => Self::BadSignature,
             _ => Self::Malformed,
         }
     }
@@ -139,7 +152,6 @@ impl Reason {
             Self::Ok => "ok",
             Self::Malformed => "malformed request",
             Self::NotStarted => "no update in progress",
-            Self::Busy => "another update is in progress",
             Self::TooLarge => "image larger than a slot",
             Self::OutOfOrder => "chunk out of order",
             Self::BadChunk => "chunk past the end or misaligned",
@@ -148,6 +160,10 @@ impl Reason {
             Self::Invalid => "image does not validate",
             Self::Flash => "flash error",
             Self::RebootPending => "an update is committed; reset the unit first",
+            Self::OtherUnit => "image made for another unit",
+            Self::Unsigned => "image not signed (this unit accepts signed images only)",
+            Self::UnknownKey => "image signed by a key this unit does not hold",
+            Self::BadSignature => "image signature does not verify",
         }
     }
 }

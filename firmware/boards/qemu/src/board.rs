@@ -30,6 +30,7 @@ use tcomp_firmware::replay::{
     UNIT_SERIAL, Vector,
 };
 use tcomp_firmware::slots::{QEMU_LAYOUT, Source, boot, choose};
+use tcomp_firmware::trust::Trust;
 use tcomp_firmware::{HASH_START, fold_hash};
 
 /// Instructions per SysTick tick under `-icount shift=3` (40 ns per tick, 8 ns per instruction).
@@ -88,6 +89,8 @@ unsafe extern "C" {
     static __models_end: u8;
     static __replay_start: u8;
     static __replay_end: u8;
+    static __keys_start: u8;
+    static __keys_end: u8;
     static _stack_start: u8;
 }
 
@@ -267,12 +270,23 @@ pub fn setup(
             (&raw const __models_end as usize).saturating_sub(&raw const __models_start as usize),
         )
     };
-    // The slots' boot work, before the watchdog and the loop start: a new image's trial begun,
-    // a failed trial rolled back, the slot an update writes erased unless the old image is needed.
-    let choice = match boot(&mut flash, &QEMU_LAYOUT) {
+    // The slots' boot work, before the watchdog and the loop start: each candidate's signature
+    // verified before a slot is chosen, a new image's trial begun, a failed trial rolled back, the
+    // slot an update writes erased unless the old image is needed. Counted (SysTick, 5
+    // instructions a tick under `-icount shift=3`): the verifier's cost at boot.
+    let counter = drivers::InstructionCounter::new(core.SYST);
+    let v0 = counter.now();
+    let choice = match boot(&mut flash, &QEMU_LAYOUT, |b| trust().check(b)) {
         Ok(c) => c,
-        Err(_) => choose(&mut flash, &QEMU_LAYOUT),
+        Err(_) => choose(&mut flash, &QEMU_LAYOUT, |b| trust().check(b)),
     };
+    let v1 = counter.now();
+    defmt::println!(
+        "BOOT-VERIFY instructions={=u32} source={} signer={}",
+        counter.ticks_between(v0, v1) * INSTRUCTIONS_PER_TICK,
+        choice.source,
+        choice.signer
+    );
     let image = match choice.image {
         // SAFETY: the active slot's payload: an update writes only the other slot, and the
         // board's erase at boot touched only that one, so nothing writes these bytes while the
@@ -321,7 +335,7 @@ pub fn setup(
             timer: Timer::timer0(),
             time: TimeBase::start(),
             watchdog: None,
-            _syst: drivers::InstructionCounter::new(core.SYST),
+            _syst: counter,
             after_update: after_update.then_some(choice.source),
             held: 0,
         },
@@ -336,6 +350,9 @@ pub fn setup(
             counters: vector.counters,
             thermometers: vector.thermometers,
             image,
+            signer: choice.signer,
+            refused: choice.refused,
+            keys: keys(),
             active: choice.active,
             layout: QEMU_LAYOUT,
             trial: choice.trial,
@@ -597,8 +614,8 @@ fn finish() -> ! {
         let confirmed = CONFIRM_STATE.load(Ordering::Acquire) == CONFIRMED;
         // SAFETY: as below: nothing writes the region any more.
         let mut flash = unsafe { models_flash() };
-        let now = choose(&mut flash, &QEMU_LAYOUT).source;
-        let state = match choose(&mut flash, &QEMU_LAYOUT).active {
+        let now = choose(&mut flash, &QEMU_LAYOUT, |b| trust().check(b)).source;
+        let state = match choose(&mut flash, &QEMU_LAYOUT, |b| trust().check(b)).active {
             Some(a) => tcomp_core::slots::trial(&mut flash, &QEMU_LAYOUT, a.slot).ok(),
             None => None,
         };
@@ -616,12 +633,25 @@ fn finish() -> ! {
         // SAFETY: every task that writes the region is stopped (the update task's last request
         // was the commit, and nothing runs but this).
         let mut flash = unsafe { models_flash() };
-        let next = choose(&mut flash, &QEMU_LAYOUT).source;
+        let next = choose(&mut flash, &QEMU_LAYOUT, |b| trust().check(b)).source;
         defmt::println!("UPDATE-COMMITTED {}: resetting to run it", next);
         r.update_reset = UPDATE_RESET;
         cortex_m::peripheral::SCB::sys_reset();
     }
     drivers::exit(ok)
+}
+
+/// The unit's key store: the `KEYS` region of `memory.x` (QEMU has no OTP: its loader puts the
+/// key block there as a factory programs the STM32F407's OTP blocks 1–4).
+fn keys() -> &'static [u8] {
+    // SAFETY: the linker symbols bound the KEYS region (mapped RAM under QEMU, filled by the
+    // loader before reset); nothing in the firmware writes it.
+    unsafe { region(&raw const __keys_start, &raw const __keys_end) }
+}
+
+/// The unit's trust: the replay board's serial and its key store (`tcomp_firmware::trust`).
+fn trust() -> Trust<'static> {
+    Trust::new(UNIT_SERIAL, keys())
 }
 
 /// The `MODELS` region as a flash.

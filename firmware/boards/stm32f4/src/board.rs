@@ -72,16 +72,18 @@ pub fn setup(
         );
     }
     // The slots' boot work, before the watchdog starts (an erase stalls every flash fetch for
-    // 1–2 s): a new image's trial begun, a failed trial rolled back, the slot an update writes
+    // 1–2 s): each candidate's signature verified against the OTP keys before a slot is chosen
+    // (a slot refused is never put on trial), a new image's trial begun, a failed trial rolled back, the slot an update writes
     // erased unless the old image is still the rollback.
-    let choice = match boot(&mut flash, &STM32F4_LAYOUT) {
+    let trust = crate::trust();
+    let choice = match boot(&mut flash, &STM32F4_LAYOUT, |b| trust.check(b)) {
         Ok(c) => c,
         Err(e) => {
             defmt::warn!(
                 "model slots: boot work failed ({}); running what they hold",
                 e
             );
-            choose(&mut flash, &STM32F4_LAYOUT)
+            choose(&mut flash, &STM32F4_LAYOUT, |b| trust.check(b))
         }
     };
     defmt::info!("models: {}", choice);
@@ -115,6 +117,9 @@ pub fn setup(
             counters: tcomp_firmware::app::MAX_COUNTERS,
             thermometers: setup::THERMOMETERS,
             image,
+            signer: choice.signer,
+            refused: choice.refused,
+            keys: crate::otp_keys(),
             active: choice.active,
             layout: STM32F4_LAYOUT,
             trial: choice.trial,

@@ -54,3 +54,23 @@ pub fn unit_serial() -> u64 {
     }
     u64::from_le_bytes(b)
 }
+
+/// OTP blocks 1–4 (`0x1FFF_7820`, 128 bytes): the Ed25519 public keys this unit trusts, one per
+/// 32-byte block, programmed at the factory after the serial (see README.md, "Signed images").
+/// Outside the model slots and the firmware's sectors: no image or firmware update touches it.
+/// An unprogrammed block (all 0xFF) or a revoked one (all 0x00) holds no key.
+const OTP_KEYS: usize = 0x1FFF_7820;
+/// Bytes of the key store: four keys, for rotation.
+const OTP_KEYS_LEN: usize = 4 * 32;
+
+/// The key store in OTP.
+pub fn otp_keys() -> &'static [u8] {
+    // SAFETY: the OTP area is always mapped and readable on the STM32F405/407, and nothing in
+    // the firmware programs it; 128 bytes from block 1 lie inside its 512 bytes.
+    unsafe { core::slice::from_raw_parts(OTP_KEYS as *const u8, OTP_KEYS_LEN) }
+}
+
+/// The unit's trust: its serial and its keys (`tcomp_firmware::trust`).
+pub fn trust() -> tcomp_firmware::trust::Trust<'static> {
+    tcomp_firmware::trust::Trust::new(unit_serial(), otp_keys())
+}

@@ -7,7 +7,7 @@
 //! | sample timer | TIM2 (32-bit) | — | 1 MHz tick, update every 5,000 ticks (200 Hz) |
 //! | thermometers | SPI1, 12 × ADS1220 | SCK PA5, MISO PA6, MOSI PA7; CS PE0–PE11; DRDY PD0–PD11 (inputs: each conversion read once, when ready) | mode 1, ≤ 5 MHz |
 //! | counter block | SPI2, FPGA | SCK PB13, MISO PB14, MOSI PB15, CS PB12 | mode 0, ≤ 10 MHz |
-//! | frames out | USART1 TX | PA9 | [`BAUD`] 8N1, TXE interrupt (the application's drain) |
+//! | frames out | USART1 TX | PA9 | [`BAUD`] (921,600, the description's `[link] baud`) 8N1, TXE interrupt (the application's drain) |
 //! | model updates in | USART1 RX, DMA2 stream 2 channel 4 | PA10 | same link: `tcomp flash`; circular DMA into a 2 KiB ring (half/full-transfer interrupts) |
 //! | watchdog | IWDG | — | 50 ms (ten periods), started by the application after the boot's erase |
 //!
@@ -49,8 +49,10 @@ pub const CYCLES_PER_PERIOD: u32 = SYSCLK_HZ / 1_000_000 * TICKS_PER_PERIOD;
 pub const THERMOMETERS: usize = 12;
 /// Counter-block channels used.
 pub const COUNTERS: usize = 6;
-/// UART baud rate: the link's one rate, the firmware library's (`tcomp_firmware::app::BAUD`).
-pub const BAUD: u32 = tcomp_firmware::app::BAUD;
+/// UART baud rate: the board description's `[link] baud` (`build.rs`, `tcomp_firmware::wiring`),
+/// the one place it is set: USART1 runs at it, the receive ring is sized from it, and
+/// `tcomp flash --board` opens the port at it.
+pub const BAUD: u32 = crate::LINK_BAUD;
 /// Watchdog timeout.
 pub const WATCHDOG_MS: u32 = 50;
 /// PT100 reference resistor on each ADS1220, Ω.

@@ -1,12 +1,25 @@
 //! The update over any byte link (`Read + Write`): a serial port for `tcomp flash`, a pair of pipes
 //! in the tests. Requests go out one at a time; the bytes that come back are fed to two decoders,
 //! the update replies' and the output frames', each skipping the other's frames as garbage.
+//!
+//! An update that fails while the unit holds its session (the link died mid-transfer) ends with
+//! one ABORT, best effort: the unit's active slot is untouched either way, and the next run's
+//! BEGIN (another session number) takes over what is left open.
 
 use std::io::{ErrorKind, Read, Write};
 use std::time::{Duration, Instant};
 use tcomp_core::frame;
 use tcomp_core::update::wire::{Decoder, MAX_FRAME};
-use tcomp_core::update::{Info, Sender, Status};
+use tcomp_core::update::{Failure, Info, Sender, Status};
+
+/// How long to wait for replies.
+#[derive(Clone, Copy, Debug)]
+pub struct Timing {
+    /// For every request but COMMIT.
+    pub reply: Duration,
+    /// For COMMIT: the unit reads its slot back and checks the image and its signature first.
+    pub commit: Duration,
+}
 
 /// What an update did.
 #[derive(Clone, Debug)]
@@ -17,28 +30,36 @@ pub struct Outcome {
     pub info: Option<Info>,
     /// Requests sent again.
     pub repeats: u32,
+    /// Whether an ABORT was sent (the update failed while the unit held its session).
+    pub aborted: bool,
     /// The unit's output frames seen meanwhile.
     pub output: frame::Stats,
     /// Their first and last sequence numbers.
     pub first_sequence: Option<u32>,
+    /// The unit's last boot report seen (the unit sends one as soon as an update ends: its image
+    /// state, signer and the update's outcome with its reason).
+    pub report: Option<frame::BootReport>,
     /// See `first_sequence`.
     pub last_sequence: Option<u32>,
 }
 
-/// Sends `image` and waits for each reply up to `timeout`; `progress(sent, total)` after each ACK.
+/// Sends `image` in session `session` and waits for each reply as `timing` says;
+/// `progress(sent, total)` after each ACK.
 /// The output frames are counted from the unit's first reply (INFO) to its last: what came before
 /// is not part of the update (and a port opened a moment ago may have passed it through a line
 /// discipline that was not raw yet).
 pub fn transfer<L: Read + Write>(
     link: &mut L,
     image: &[u8],
-    timeout: Duration,
+    session: u32,
+    timing: Timing,
     mut progress: impl FnMut(u32, u32),
 ) -> std::io::Result<Outcome> {
-    let mut tx = Sender::new(image);
+    let mut tx = Sender::new(image, session);
     let mut replies = Decoder::new();
     let mut outputs = frame::Decoder::new();
     let (mut first, mut last) = (None, None);
+    let mut report = None;
     let mut request = [0u8; MAX_FRAME];
     let mut buf = [0u8; 4096];
     while let Some(n) = tx.request(&mut request) {
@@ -52,7 +73,12 @@ pub fn transfer<L: Read + Write>(
             _ => {}
         }
         let seq = tx.seq();
-        let deadline = Instant::now() + timeout;
+        let wait = if tx.is_committing() {
+            timing.commit.max(timing.reply)
+        } else {
+            timing.reply
+        };
+        let deadline = Instant::now() + wait;
         let answered = loop {
             let got = match link.read(&mut buf) {
                 Ok(0) => 0,
@@ -68,11 +94,13 @@ pub fn transfer<L: Read + Write>(
             for &b in buf.get(..got).unwrap_or(&[]) {
                 // Counted from the unit's first reply on: the update's span.
                 let counting = tx.info().is_some();
-                outputs.feed(&[b], |f| {
-                    if counting {
+                outputs.feed_items(&[b], |item| match item {
+                    frame::Item::Data(f) if counting => {
                         first.get_or_insert(f.sequence);
                         last = Some(f.sequence);
                     }
+                    frame::Item::Boot(r) => report = Some(r),
+                    frame::Item::Data(_) => {}
                 });
                 if !counting {
                     outputs = frame::Decoder::new();
@@ -98,10 +126,40 @@ pub fn transfer<L: Read + Write>(
             progress(sent, tx.len());
         }
     }
+    // The unit answers the update's end with a boot report (its outcome and reason): when the
+    // unit answered the last request (not after a timeout), listen for it a little longer, ten
+    // reply timeouts at most (620 ms at 921,600 baud; a board sends it within one period).
+    let answered = matches!(
+        tx.status(),
+        Status::Done { .. } | Status::Failed(Failure::Unit(_))
+    );
+    if answered {
+        let deadline = Instant::now() + timing.commit.min(timing.reply * 10);
+        let ended = |r: &Option<frame::BootReport>| {
+            r.is_some_and(|r| r.update != frame::update_state::NONE)
+        };
+        while !ended(&report) && Instant::now() < deadline {
+            let got = match link.read(&mut buf) {
+                Ok(k) => k,
+                Err(e) if e.kind() == ErrorKind::BrokenPipe => break,
+                Err(_) => 0,
+            };
+            // Still counted: the frames while it listens are in the counts, so in the span too.
+            outputs.feed_items(buf.get(..got).unwrap_or(&[]), |item| match item {
+                frame::Item::Boot(r) => report = Some(r),
+                frame::Item::Data(f) => {
+                    first.get_or_insert(f.sequence);
+                    last = Some(f.sequence);
+                }
+            });
+        }
+    }
     Ok(Outcome {
+        report,
         status: tx.status(),
         info: tx.info(),
         repeats: tx.repeats(),
+        aborted: tx.aborted(),
         output: outputs.stats(),
         first_sequence: first,
         last_sequence: last,
