@@ -80,13 +80,15 @@ def test_a_wrong_type_and_an_unknown_keyword_name_the_keyword(ifog):
 
 
 def test_a_bad_cell_is_named_by_line_and_column_as_in_the_csv(ifog, cli, tmp_path):
+    # An infinite reading is refused under every --missing policy (a NaN or empty cell is a logger
+    # dropout by default: its row is dropped and counted, see tcomp fit --missing).
     df = ifog.train.copy()
-    df.loc[5, "t_coil_c"] = np.nan
+    df.loc[5, "t_coil_c"] = np.inf
     with pytest.raises(tcomp.TcompError) as e:
         tcomp.fit(df, source="bad.csv", **IFOG_FIT)
     assert (e.value.file, e.value.line, e.value.column) == ("bad.csv", 7, 3)
     # The same cell in a file: the CLI names the same line and column.
-    df.to_csv(tmp_path / "bad.csv", index=False, na_rep="NaN")
+    df.to_csv(tmp_path / "bad.csv", index=False)
     p = cli(["fit", "--data", "bad.csv", "--target", "gyro_dph", "--reference", "ref_dph", "--signal", "T=t_coil_c", "--feature", "T", "--out", "x.tcm"], cwd=tmp_path, check=False)
     assert "bad.csv:7:3" in p.stderr and "bad.csv:7:3" in str(e.value)
 
