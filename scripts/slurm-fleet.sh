@@ -21,11 +21,22 @@ done
 work=$(mktemp -d /tmp/tcomp-slurm.XXXXXX)
 chmod 755 "$work"
 pids=()
+# The daemons write their state as they stop (slurmctld saves its job state into the spool),
+# so cleanup waits for each to exit (bounded, then SIGKILL) before it removes the directory;
+# removing it while a daemon still writes fails with "Directory not empty". A leftover
+# temporary directory is reported but does not fail the run.
 cleanup() {
-    local p
-    for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
-    for p in "$work"/*.pid; do [[ -f $p ]] && kill "$(cat "$p")" 2>/dev/null || true; done
-    rm -rf "$work"
+    local p all=() i
+    for p in "${pids[@]}"; do all+=("$p"); done
+    for p in "$work"/*.pid; do [[ -f $p ]] && all+=("$(cat "$p")"); done
+    for p in "${all[@]}"; do kill "$p" 2>/dev/null || true; done
+    for p in "${all[@]}"; do
+        for ((i = 0; i < 100; i++)); do kill -0 "$p" 2>/dev/null || break; sleep 0.1; done
+        kill -9 "$p" 2>/dev/null || true
+    done
+    for ((i = 0; i < 5; i++)); do rm -rf "$work" 2>/dev/null && return 0; sleep 1; done
+    echo "slurm-fleet: could not remove $work (left behind)" >&2
+    return 0
 }
 trap cleanup EXIT
 

@@ -17,6 +17,8 @@ fn report() -> BootReport {
     r.image_version = 2;
     r.image_state = image_state::OK;
     r.flags = 1;
+    r.stack_peak = 9_504;
+    r.worst_task = 0x0012_3456;
     let ch: Vec<ChannelState> = (0..6)
         .map(|id| ChannelState {
             id,

@@ -7,7 +7,7 @@ use super::liveness::{Liveness, Task};
 use super::timing::{Edges, Entry};
 use super::{
     CONFIRM_DUE, CONFIRM_PERIODS, CONFIRM_STATE, DRAIN_BEAT, RESET_DRAINED, RESET_STATE, STATS,
-    UPDATE_BEAT,
+    Stats, UPDATE_BEAT,
 };
 use crate::app::{App, MAX_CHANNELS, Record, status};
 use crate::boot::REPORT_PERIODS;
@@ -228,11 +228,14 @@ impl<S: SampleIo> SampleTask<S> {
     }
 
     /// Sends the boot report, stamped with the sequence number of the next data frame and the last
-    /// update's outcome ([`crate::boot::stamp`]). Not
-    /// inlined, so its buffer is not in the sample task's frame.
+    /// update's outcome ([`crate::boot::stamp`]), and with the unit's status as [`STATS`] holds
+    /// it: the stack's peak (the board's paint, measured in its `idle`) and the sample task's
+    /// worst cost. Not inlined, so its buffer is not in the sample task's frame.
     #[inline(never)]
     pub fn send_report(&mut self, sequence: u32, enqueue: &mut dyn FnMut(&[u8]) -> bool) {
         crate::boot::stamp(&mut self.report, sequence);
+        self.report.stack_peak = Stats::get(&STATS.stack_peak);
+        self.report.worst_task = Stats::get(&STATS.worst_task);
         let mut bytes = [0u8; MAX_FRAME_LEN];
         if let Some(len) = self.report.encode(&mut bytes)
             && !enqueue(bytes.get(..len).unwrap_or(&[]))

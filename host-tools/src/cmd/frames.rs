@@ -86,6 +86,8 @@ fn report_json(r: &BootReport) -> serde_json::Value {
         "last_update": update_state::name(r.update),
         "last_update_reason": (r.update != update_state::NONE && r.update != update_state::COMMITTED)
             .then(|| Reason::from_u8(r.update_reason).describe()),
+        "stack_peak_bytes": (r.stack_peak != 0).then_some(r.stack_peak),
+        "worst_sample_task_cost": r.worst_task,
         "channels": r.channels().iter().map(|c| json!({
             "id": c.id, "state": c.state, "model": model(c.state),
         })).collect::<Vec<_>>(),

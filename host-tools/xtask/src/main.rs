@@ -3,6 +3,7 @@
 //! * `cargo xtask ci`   — fmt, clippy (host and thumbv7em, both boards, `-D warnings`), host tests,
 //!   the no_std build of the core, the STM32F407 board binary with its size budgets (`board.rs`),
 //!   the QEMU smoke run with its instruction budget, and the QEMU product run (`qemu.rs`).
+//! * `cargo xtask lint` — only fmt and clippy (the first steps of `ci`).
 //! * `cargo xtask board` — only the board binary's build and sizes.
 //! * `cargo xtask smoke` — only the QEMU smoke run.
 //! * `cargo xtask power-cut` — the model slots' power-loss test (a power cut after and inside every
@@ -38,13 +39,14 @@ fn main() -> Result<()> {
     let task = std::env::args().nth(1).unwrap_or_default();
     match task.as_str() {
         "ci" => ci(),
+        "lint" => lint(),
         "smoke" => smoke(),
         "qemu" => qemu::qemu(),
         "board" => board::board(),
         "power-cut" => power_cut(),
         "ffi" => ffi::ffi(),
         "python" => python::python(),
-        _ => bail!("usage: cargo xtask <ci|smoke|qemu|board|power-cut|ffi|python>"),
+        _ => bail!("usage: cargo xtask <ci|lint|smoke|qemu|board|power-cut|ffi|python>"),
     }
 }
 
@@ -98,8 +100,14 @@ impl Drop for Steps {
     }
 }
 
-fn ci() -> Result<()> {
-    let mut steps = Steps(Vec::new());
+/// `cargo xtask lint`: the first steps of `ci` on their own (`.ci/run` runs them while it
+/// installs Debian's packages).
+fn lint() -> Result<()> {
+    lint_steps(&mut Steps(Vec::new()))
+}
+
+/// Formatting and clippy, host and target.
+fn lint_steps(steps: &mut Steps) -> Result<()> {
     steps.run("fmt", || cargo(&["fmt", "--all", "--", "--check"]))?;
     // The host crates, the firmware's application library with them (its tests run on the host).
     steps.run("clippy_host", || {
@@ -132,8 +140,18 @@ fn ci() -> Result<()> {
             "-D",
             "warnings",
         ])
-    })?;
+    })
+}
+
+fn ci() -> Result<()> {
+    let mut steps = Steps(Vec::new());
+    lint_steps(&mut steps)?;
     steps.run("test", || cargo(&[&["test"][..], &HOST_TESTS].concat()))?;
+    // The Python step (a wheel built by maturin with its own feature set, packages from PyPI,
+    // pytest) shares nothing with the steps below but the test build's `tcomp` binary, and the
+    // steps below spend most of their time in QEMU on one core: it runs beside them, in a child
+    // xtask whose output is printed whole when it ends (so the log stays readable).
+    let python = Lane::start("python")?;
     steps.run("power_cut", power_cut)?;
     steps.run("no_std_core_hal", || {
         cargo(&[
@@ -151,7 +169,58 @@ fn ci() -> Result<()> {
     steps.run("smoke", smoke)?;
     steps.run("qemu", qemu::qemu)?;
     steps.run("ffi", ffi::ffi)?;
-    steps.run("python", python::python)
+    steps.run("python", || python.finish())
+}
+
+/// A step run beside the others: `cargo xtask <step>` as a child process (bounded by
+/// [`CARGO_LIMIT`], killed when dropped unfinished), its output kept in a file under the target
+/// directory and echoed when it ends.
+struct Lane {
+    child: proc::Bounded,
+    log: std::path::PathBuf,
+    started: Instant,
+}
+
+impl Lane {
+    fn start(step: &str) -> Result<Self> {
+        let log = qemu::target_dir().join(format!("ci-{step}.log"));
+        let file = std::fs::File::create(&log).with_context(|| format!("{}", log.display()))?;
+        let mut cmd = Command::new(std::env::current_exe()?);
+        cmd.arg(step)
+            .stdout(file.try_clone()?)
+            .stderr(file)
+            .stdin(std::process::Stdio::null());
+        eprintln!("CI-LANE {step}: started beside the next steps (its output: {})", log.display());
+        Ok(Self {
+            child: proc::Bounded::spawn(&mut cmd, &format!("`cargo xtask {step}`"), CARGO_LIMIT)?,
+            log,
+            started: Instant::now(),
+        })
+    }
+
+    /// Waits for the lane, echoes its output, and fails when it failed.
+    fn finish(mut self) -> Result<()> {
+        let status = self.child.wait();
+        let text = std::fs::read_to_string(&self.log).unwrap_or_default();
+        eprintln!(
+            "--- {} (ran beside the steps above, {:.0} s) ---\n{text}--- end of it ---",
+            self.log.display(),
+            self.started.elapsed().as_secs_f64()
+        );
+        let status = status?;
+        if !status.success() {
+            bail!("failed ({status})");
+        }
+        Ok(())
+    }
+}
+
+/// The host build the test step made (`cargo test --no-run` over [`HOST_TESTS`]): the `tcomp`
+/// binary and `libtcomp_ffi.a` that the C and Python steps use. Built with the test step's own
+/// package set, so its features are the same and nothing is compiled a second time (a `cargo
+/// build -p …` of a subset unifies features differently and rebuilds the dependency tree).
+pub fn host_build() -> Result<()> {
+    cargo(&[&["test", "--no-run"][..], &HOST_TESTS].concat())
 }
 
 /// Runs the smoke binary under QEMU (with the runner's arguments of `.cargo/config.toml`, bounded
@@ -204,15 +273,13 @@ fn smoke() -> Result<()> {
 
 /// Runs the power-loss test of the model slots and reports how many cut points it tried.
 fn power_cut() -> Result<()> {
+    // The test step's package set (see `host_build`): the test binary is already built.
     let args = [
-        "test",
-        "-p",
-        "tcomp-core",
-        "--test",
-        "power_cut",
-        "--",
-        "--nocapture",
-    ];
+        &["test"][..],
+        &HOST_TESTS,
+        &["--test", "power_cut", "--", "--nocapture"],
+    ]
+    .concat();
     eprintln!("$ cargo {}", args.join(" "));
     let out = proc::output(
         Command::new(env!("CARGO")).args(args),

@@ -43,7 +43,7 @@ pub fn python() -> Result<()> {
         }
     }
     // The CLI the tests compare the binding with.
-    crate::cargo(&["build", "-p", "tcomp"])?;
+    crate::host_build()?;
     let python = std::env::var("PYTHON").unwrap_or_else(|_| "python3".to_string());
     let bin = venv(&python, &build)?;
     run(

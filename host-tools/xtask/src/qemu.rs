@@ -12,7 +12,7 @@ use tcomp_firmware::app::{IFOG1, IMU6};
 use tcomp_firmware::image::Image;
 use tcomp_firmware::replay::{CONFIG_IFOG1, CONFIG_IMU6, UNIT_SERIAL};
 use tcomp_tests::replay::checks::{
-    check, check_continuity, check_fault_flags, check_reports, compare_frames,
+    check, check_continuity, check_fault_flags, check_reports, check_status, compare_frames,
 };
 use tcomp_tests::replay::scenario::{ifog_inputs, imu6_inputs};
 use tcomp_tests::replay::vector::{Built, Inputs, build};
@@ -440,8 +440,10 @@ fn replay_runs(
             _ => &[0],
         };
         check_reports(&reports, boots, served, states)?;
+        let (peak, worst) = check_status(&reports, boots, &s)?;
         println!(
-            "{name}: {} boot reports (unit {UNIT_SERIAL:#x}, image v2, every channel as loaded)",
+            "{name}: {} boot reports (unit {UNIT_SERIAL:#x}, image v2, every channel as loaded); \
+             the last carries stack peak {peak} B, worst sample task {worst} instructions",
             reports.len()
         );
         // Both IMU6 runs replay the same inputs: one stalled sample, one missed period (its

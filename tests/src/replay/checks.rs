@@ -92,6 +92,36 @@ pub fn check_reports(
     Ok(())
 }
 
+/// The unit's status in its boot reports (the report repeats every [`REPORT_PERIODS`], so it is
+/// also the status frame): every report sent from the loop carries a measured stack peak and a
+/// non-zero worst sample task, at most one report per boot (the one sent before the first
+/// period) has none yet, and the last report's figures are at most the run's summary (which
+/// folds in the last boot's counters). Returns the last report's (stack peak, worst task).
+pub fn check_status(reports: &[BootReport], boots: usize, summary: &Summary) -> Result<(u32, u32)> {
+    let unmeasured = reports.iter().filter(|r| r.worst_task == 0).count();
+    if unmeasured > boots {
+        bail!("{unmeasured} boot reports carry no worst sample task, for {boots} boots");
+    }
+    if let Some(r) = reports.iter().find(|r| r.worst_task != 0 && r.stack_peak == 0) {
+        bail!("a report sent from the loop carries no stack peak: {r:?}");
+    }
+    let last = reports.last().context("no boot report")?;
+    if last.worst_task == 0
+        || u64::from(last.stack_peak) > summary.stack
+        || u64::from(last.worst_task) > summary.task_max
+    {
+        bail!(
+            "the last report's status (stack {} B, worst task {}) does not agree with the summary \
+             (stack {} B, worst task {})",
+            last.stack_peak,
+            last.worst_task,
+            summary.stack,
+            summary.task_max
+        );
+    }
+    Ok((last.stack_peak, last.worst_task))
+}
+
 /// The firmware's summary numbers of one run.
 pub struct Summary {
     /// Samples compared.

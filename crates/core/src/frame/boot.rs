@@ -11,7 +11,7 @@
 //! ```text
 //! offset    size  field
 //! 0         2     sync word 0xEB 0x90
-//! 2         1     kind and version: 0x82 (boot report, version 2)
+//! 2         1     kind and version: 0x83 (boot report, version 3)
 //! 3         1     channel count K (0..=8)
 //! 4         4     sequence number of the next data frame (the report does not consume one)
 //! 8         8     the unit's serial
@@ -29,12 +29,22 @@
 //! 48        1     the last update since boot (see [`update_state`]: 0 none, 1 committed, runs
 //!                 from the next reset, 2 refused, 3 failed)
 //! 49        1     its reason: the update protocol's `Reason` code (0 when committed or none)
-//! 50        3·K   per channel: channel id u16, model state u8 (0 loaded, else the reason, see
+//! 50        4     the stack's peak use since boot, bytes, as the board measures it (its paint;
+//!                 0 until the first measurement)
+//! 54        4     the sample task's worst cost since boot (entry to the watchdog feed) on the
+//!                 board's cost counter: core cycles on the STM32F407 (the DWT counter, 840,000
+//!                 a 200 Hz period at 168 MHz), instructions under QEMU
+//! 58        3·K   per channel: channel id u16, model state u8 (0 loaded, else the reason, see
 //!                 the firmware's `LoadError::code`)
-//! 50 + 3K   4     CRC-32 of bytes 2 .. 50 + 3K
+//! 58 + 3K   4     CRC-32 of bytes 2 .. 58 + 3K
 //! ```
 //!
-//! Version 1 (0x81) had no key id and no update outcome (header 40 bytes); it is not read.
+//! The report repeats every [`BOOT_REPORT_PERIOD_S`], so it is also the unit's status frame: the
+//! stack peak and the worst sample task are read off a running unit over the same link, without
+//! a debugger (the budgets they are held to: BENCHMARKS.md, "Firmware").
+//!
+//! Version 1 (0x81) had no key id and no update outcome (header 40 bytes); version 2 (0x82) no
+//! stack peak and worst cost (header 50 bytes); neither is read.
 //! A refused update shows in every report until the next reset, so a user who looks at the unit
 //! after a refused `tcomp flash` sees why, and that it still runs its old image.
 
@@ -42,13 +52,13 @@ use super::{MAX_CHANNELS, SYNC, le_u32, le_u64};
 use crate::blob::crc32;
 
 /// The version byte of a boot report (the data frames' is 1).
-pub const BOOT_VERSION: u8 = 0x82;
+pub const BOOT_VERSION: u8 = 0x83;
 /// How often the firmware repeats the report, seconds. Ten seconds: a user attaching a terminal
 /// sees it within the time it takes to look at the screen, and at 200 Hz it costs one 64-byte
 /// frame per 2,000 data frames (0.04 % of the link).
 pub const BOOT_REPORT_PERIOD_S: u32 = 10;
 /// Bytes before the channels.
-pub const BOOT_HEADER_LEN: usize = 50;
+pub const BOOT_HEADER_LEN: usize = 58;
 /// Flag bit: the boot followed a watchdog reset.
 pub const WATCHDOG: u8 = 1;
 /// Flag bit: a development build, which runs unsigned images (chosen at build time; every
@@ -162,6 +172,11 @@ pub struct BootReport {
     pub update: u8,
     /// Its reason (the update protocol's `Reason` code).
     pub update_reason: u8,
+    /// The stack's peak use since boot, bytes (0: not measured yet).
+    pub stack_peak: u32,
+    /// The sample task's worst cost since boot, on the board's cost counter (STM32F407: core
+    /// cycles; QEMU: instructions).
+    pub worst_task: u32,
     channels: [ChannelState; MAX_CHANNELS],
     count: u8,
 }
@@ -180,6 +195,8 @@ impl BootReport {
         signer: 0,
         update: 0,
         update_reason: 0,
+        stack_peak: 0,
+        worst_task: 0,
         channels: [ChannelState { id: 0, state: 0 }; MAX_CHANNELS],
         count: 0,
     };
@@ -216,6 +233,8 @@ impl BootReport {
         w.put(&[self.image_state, self.flags]);
         w.put(&self.signer.to_le_bytes());
         w.put(&[self.update, self.update_reason]);
+        w.put(&self.stack_peak.to_le_bytes());
+        w.put(&self.worst_task.to_le_bytes());
         for c in self.channels() {
             w.put(&c.id.to_le_bytes());
             w.put(&[c.state]);
@@ -247,6 +266,8 @@ impl BootReport {
             signer: le_u64(bytes, 40)?,
             update: *bytes.get(48)?,
             update_reason: *bytes.get(49)?,
+            stack_peak: le_u32(bytes, 50)?,
+            worst_task: le_u32(bytes, 54)?,
             ..Self::default()
         };
         for (i, c) in r.channels.iter_mut().enumerate().take(k) {

@@ -570,9 +570,18 @@ impl application::SampleIo for ReplayIo {
 /// A board would sleep here (WFI). Under `-icount …,sleep=off` QEMU 7.2 delivers only every second
 /// CMSDK timer interrupt across a WFI (measured: two timer periods between interrupts with WFI, one
 /// when the CPU does not sleep), so it spins; the run is made short by a coarser `-icount` shift.
+///
+/// Like the STM32F407's `idle`, it measures the stack's peak now and then (every 2¹⁶ spins, a
+/// few times a second of guest time) into [`STATS`], which the periodic boot report carries.
 pub fn idle() -> ! {
+    let mut spins: u32 = 0;
     while !DONE.load(Ordering::Acquire) {
-        cortex_m::asm::nop();
+        spins = spins.wrapping_add(1);
+        if spins.is_multiple_of(1 << 16) {
+            STATS.stack_peak.fetch_max(stack_peak(), Ordering::Relaxed);
+        } else {
+            cortex_m::asm::nop();
+        }
     }
     finish()
 }

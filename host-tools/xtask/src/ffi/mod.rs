@@ -51,7 +51,7 @@ pub fn ffi() -> Result<()> {
     let c_dir = root.join("crates/ffi/c");
     let include = root.join("crates/ffi/include");
 
-    cargo(&["build", "-p", "tcomp", "-p", "tcomp-ffi"])?;
+    crate::host_build()?;
     cargo(&[
         "clippy",
         "-p",
