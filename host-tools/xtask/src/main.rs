@@ -18,6 +18,7 @@
 //!   `tcomp flash` (`update.rs`).
 
 mod board;
+mod budget;
 mod defmt;
 mod elf;
 mod ffi;
@@ -190,7 +191,10 @@ impl Lane {
             .stdout(file.try_clone()?)
             .stderr(file)
             .stdin(std::process::Stdio::null());
-        eprintln!("CI-LANE {step}: started beside the next steps (its output: {})", log.display());
+        eprintln!(
+            "CI-LANE {step}: started beside the next steps (its output: {})",
+            log.display()
+        );
         Ok(Self {
             child: proc::Bounded::spawn(&mut cmd, &format!("`cargo xtask {step}`"), CARGO_LIMIT)?,
             log,

@@ -17,34 +17,15 @@ use tcomp_tests::replay::checks::{
 use tcomp_tests::replay::scenario::{ifog_inputs, imu6_inputs};
 use tcomp_tests::replay::vector::{Built, Inputs, build};
 
-/// Budgets from the part, the STM32F407 (168 MHz Cortex-M4F, 128 KiB SRAM + 64 KiB CCM, 1 MiB
-/// flash in one bank), with the margins stated here.
-///
-/// CPU: the sample task may take at most a quarter of its 5 ms period, 210,000 core cycles: the
-/// rest of the period belongs to the tasks below it (the drain: about 10 % of the CPU while the
-/// line is full; the update task's chunk programs) and the margin for the sensors' SPI reads on
-/// the board, which QEMU does not time. QEMU counts instructions; an M4F at 168 MHz with 5 flash
-/// wait states retires straight-line code from the ART accelerator at about one per cycle, loads
-/// and branches cost 2–3, the FPU's divide and square root 14: counted at 2 cycles per instruction
-/// the budget is 105,000 instructions. The receive path's worst latency follows from it: the
-/// update task, pended every period, reads the ring within one period plus the sample task's worst
-/// (5 ms + 1.25 ms), 576 bytes of a 921,600-baud line, well inside the 2 KiB ring.
-const CYCLES_PER_INSTRUCTION: u64 = 2;
-const SAMPLE_TASK_CYCLES: u64 = 168_000_000 / 200 / 4;
-const WORST_INSTRUCTIONS_BUDGET: u64 = SAMPLE_TASK_CYCLES / CYCLES_PER_INSTRUCTION;
+/// The budgets, the part's (see `budget.rs`).
+use crate::budget::{
+    CORE_HZ, CYCLES_PER_INSTRUCTION, FLASH_BUDGET, SAMPLE_HZ, SAMPLE_TASK_INSTRUCTIONS as WORST_INSTRUCTIONS_BUDGET,
+    STACK_BUDGET, STATIC_RAM_BUDGET,
+};
 /// The sample after missed timer periods carries every channel's filters across the gap too
 /// (`tcomp_core::stream`'s gap step): the same budget (it was its own before, when the ordinary
 /// sample's was within 1 % of it).
 const GAP_SAMPLE_BUDGET: u64 = WORST_INSTRUCTIONS_BUDGET;
-/// RAM: statics live in SRAM1 + SRAM2 (128 KiB) and the stack alone in the CCM (64 KiB) on the
-/// board; each may use three quarters of its region, a quarter kept for what comes next (more
-/// channels or larger models, the ring or queue grown) and the painting's granularity.
-const STATIC_RAM_BUDGET: u64 = 128 * 1024 * 3 / 4;
-const STACK_BUDGET: u64 = 64 * 1024 * 3 / 4;
-const FLASH_BUDGET: u64 = crate::board::FLASH_BUDGET;
-/// The core's clock on the STM32F407 board, for the CPU load the instruction counts mean.
-const CORE_HZ: f64 = 168e6;
-const SAMPLE_HZ: f64 = 200.0;
 /// One `tcomp` command of the run (a simulation, a fit of 32 centers, an image): a second or two.
 const TCOMP_LIMIT: Duration = proc::minutes(3);
 /// One QEMU replay: 10,000 samples (50 s of guest time) take about 6 s on the 2-core machine.
@@ -532,7 +513,7 @@ fn report(elf: &Path, totals: &Totals) -> Result<()> {
     } = *totals;
     let (flash, static_ram) = crate::elf::flash_and_static_ram(elf)?;
     let (board_flash, board_ram) = crate::board::sizes()?;
-    let load = |i: u64| (i * CYCLES_PER_INSTRUCTION) as f64 * SAMPLE_HZ / CORE_HZ * 100.0;
+    let load = |i: u64| (i * CYCLES_PER_INSTRUCTION * SAMPLE_HZ) as f64 / CORE_HZ as f64 * 100.0;
     println!(
         "instructions per 6-channel sample (every model every sample): mean {mean}, worst {worst} \
          (budget {WORST_INSTRUCTIONS_BUDGET}); the sample after missed periods {worst_after_gap} \

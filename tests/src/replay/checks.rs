@@ -102,7 +102,10 @@ pub fn check_status(reports: &[BootReport], boots: usize, summary: &Summary) -> 
     if unmeasured > boots {
         bail!("{unmeasured} boot reports carry no worst sample task, for {boots} boots");
     }
-    if let Some(r) = reports.iter().find(|r| r.worst_task != 0 && r.stack_peak == 0) {
+    if let Some(r) = reports
+        .iter()
+        .find(|r| r.worst_task != 0 && r.stack_peak == 0)
+    {
         bail!("a report sent from the loop carries no stack peak: {r:?}");
     }
     let last = reports.last().context("no boot report")?;
