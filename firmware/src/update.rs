@@ -1,10 +1,10 @@
 //! The update task: bytes from the serial link in, replies out, the inactive slot written — run
-//! below the sample loop's priority (QEMU: polled from `main`'s idle loop while the timer
-//! interrupt runs the loop; a board: a task below the sample task), so the loop never waits for
-//! it.
+//! below the sample loop's priority (the application's `update` task, priority 1, on every board:
+//! [`crate::application`]), so the loop never waits for it.
 //!
 //! It is the core's [`Receiver`] behind the core's frame [`Decoder`]: one protocol frame of
-//! receive buffer (75 B), and the reply encoded into a buffer of one reply frame.
+//! receive buffer (79 B, [`tcomp_core::update::wire::MAX_FRAME`]), and the reply encoded into a
+//! buffer of one reply frame.
 
 use core::sync::atomic::{AtomicBool, AtomicU16, Ordering};
 use embedded_storage::nor_flash::NorFlash;

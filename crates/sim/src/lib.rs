@@ -2,9 +2,9 @@
 //!
 //! Why: fitting, diagnosis and the demo need data whose truth is known. A [`Scenario`] describes a
 //! sensor (RLG, QMA, IFOG), a chamber profile of holds and ramps, bias effects with coefficients,
-//! noise, rates and a seed; the simulator streams a measurement CSV (the DESIGN.md convention) and
-//! returns a [`Truth`]: the effects as exact expressions in the core's feature language, and the
-//! noise floor actually drawn.
+//! noise, rates and a seed; the simulator streams a measurement CSV (the design notes' convention)
+//! and returns a [`Truth`]: the effects as exact expressions in the core's feature language, and
+//! the noise floor actually drawn.
 //!
 //! ```no_run
 //! # fn main() -> tcomp_sim::Result<()> {
