@@ -19,8 +19,8 @@ use tcomp_tests::replay::vector::{Built, Inputs, build};
 
 /// The budgets, the part's (see `budget.rs`).
 use crate::budget::{
-    CORE_HZ, CYCLES_PER_INSTRUCTION, FLASH_BUDGET, SAMPLE_HZ, SAMPLE_TASK_INSTRUCTIONS as WORST_INSTRUCTIONS_BUDGET,
-    STACK_BUDGET, STATIC_RAM_BUDGET,
+    CORE_HZ, CYCLES_PER_INSTRUCTION, FLASH_BUDGET, SAMPLE_HZ,
+    SAMPLE_TASK_INSTRUCTIONS as WORST_INSTRUCTIONS_BUDGET, STACK_BUDGET, STATIC_RAM_BUDGET,
 };
 /// The sample after missed timer periods carries every channel's filters across the gap too
 /// (`tcomp_core::stream`'s gap step): the same budget (it was its own before, when the ordinary
