@@ -205,11 +205,9 @@ pub fn qemu() -> Result<()> {
         QEMU_BIN,
     ])?;
     let elf = target_dir.join(TARGET).join("release").join(QEMU_BIN);
-    // The host CLI makes the models and vectors; build it so `cargo xtask qemu` stands alone. With
-    // the test step's own command, so in CI it is already built: `cargo build -p tcomp` resolves
-    // the dependencies' features for `tcomp` alone and rebuilt some forty crates a second time
-    // (serde, nalgebra, the trainer, …: minutes on a fresh 2-core machine).
-    cargo(&[&["test", "--no-run"][..], &crate::HOST_TESTS].concat())?;
+    // The host CLI makes the models and vectors; build it so `cargo xtask qemu` stands alone
+    // (in CI the test step built it already: see `host_build`).
+    crate::host_build()?;
     fit_models(&work)?;
     simulate_slices(&root, &work)?;
     // The images, made as a user makes them: the shipped board descriptions, the unit serial the
