@@ -227,6 +227,37 @@ pub fn host_build() -> Result<()> {
     cargo(&[&["test", "--no-run"][..], &HOST_TESTS].concat())
 }
 
+/// The executable of the integration test `name` in the host build ([`host_build`]'s command,
+/// which builds nothing when the test step ran), from cargo's JSON messages.
+fn host_test_binary(name: &str) -> Result<std::path::PathBuf> {
+    let args = [
+        &["test", "--no-run", "--message-format=json-render-diagnostics"][..],
+        &HOST_TESTS,
+    ]
+    .concat();
+    eprintln!("$ cargo {}", args.join(" "));
+    let out = proc::output(
+        Command::new(env!("CARGO")).args(&args),
+        "the host test build",
+        CARGO_LIMIT,
+    )?;
+    if !out.status.success() {
+        bail!("the host test build failed ({})", out.status);
+    }
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .find(|m| {
+            m["reason"] == "compiler-artifact"
+                && m["target"]["name"] == name
+                && m["target"]["kind"]
+                    .as_array()
+                    .is_some_and(|k| k.iter().any(|k| k == "test"))
+        })
+        .and_then(|m| m["executable"].as_str().map(std::path::PathBuf::from))
+        .with_context(|| format!("the host test build has no test binary `{name}`"))
+}
+
 /// Runs the smoke binary under QEMU (with the runner's arguments of `.cargo/config.toml`, bounded
 /// by [`SMOKE_LIMIT`]), echoes its output, and checks its verdict, QEMU's exit code and the
 /// instruction budget.
@@ -277,16 +308,13 @@ fn smoke() -> Result<()> {
 
 /// Runs the power-loss test of the model slots and reports how many cut points it tried.
 fn power_cut() -> Result<()> {
-    // The test step's package set (see `host_build`): the test binary is already built.
-    let args = [
-        &["test"][..],
-        &HOST_TESTS,
-        &["--test", "power_cut", "--", "--nocapture"],
-    ]
-    .concat();
-    eprintln!("$ cargo {}", args.join(" "));
+    // The test step's binary, run with its output shown (`cargo test --test power_cut` selects
+    // one target, resolves the dependencies' features for it alone and rebuilt the core's
+    // dependency tree: a minute on the 2-core machine).
+    let exe = host_test_binary("power_cut")?;
+    eprintln!("$ {} --nocapture", exe.display());
     let out = proc::output(
-        Command::new(env!("CARGO")).args(args),
+        Command::new(&exe).arg("--nocapture"),
         "the power-loss test",
         CARGO_LIMIT,
     )?;
