@@ -107,23 +107,15 @@ fn lint() -> Result<()> {
     lint_steps(&mut Steps(Vec::new()))
 }
 
-/// Formatting and clippy, host and target.
+/// Formatting and clippy, host and target. The target's clippy (the firmware crates and both
+/// boards' binaries for thumbv7em, the STM32F4 PAC among them) shares no artifact with the host's
+/// but a few proc-macros, so it runs beside it, in its own target directory (cargo's lock on one
+/// directory would serialise the two): the host check leaves a core idle much of the time.
 fn lint_steps(steps: &mut Steps) -> Result<()> {
     steps.run("fmt", || cargo(&["fmt", "--all", "--", "--check"]))?;
-    // The host crates, the firmware's application library with them (its tests run on the host).
-    steps.run("clippy_host", || {
-        cargo(
-            &[
-                &["clippy"][..],
-                &HOST_TESTS,
-                &["--all-targets", "--", "-D", "warnings"],
-            ]
-            .concat(),
-        )
-    })?;
-    // Everything that runs on the target, both boards' binaries with it.
-    steps.run("clippy_target", || {
-        cargo(&[
+    let mut clippy_target = Command::new(env!("CARGO"));
+    clippy_target
+        .args([
             "clippy",
             "-p",
             "tcomp-core",
@@ -141,7 +133,21 @@ fn lint_steps(steps: &mut Steps) -> Result<()> {
             "-D",
             "warnings",
         ])
-    })
+        .env("CARGO_TARGET_DIR", qemu::target_dir().join("clippy-target"));
+    // Everything that runs on the target, both boards' binaries with it.
+    let target = Lane::start("clippy_target", clippy_target)?;
+    // The host crates, the firmware's application library with them (its tests run on the host).
+    steps.run("clippy_host", || {
+        cargo(
+            &[
+                &["clippy"][..],
+                &HOST_TESTS,
+                &["--all-targets", "--", "-D", "warnings"],
+            ]
+            .concat(),
+        )
+    })?;
+    steps.run("clippy_target", || target.finish())
 }
 
 fn ci() -> Result<()> {
@@ -152,7 +158,9 @@ fn ci() -> Result<()> {
     // pytest) shares nothing with the steps below but the test build's `tcomp` binary, and the
     // steps below spend most of their time in QEMU on one core: it runs beside them, in a child
     // xtask whose output is printed whole when it ends (so the log stays readable).
-    let python = Lane::start("python")?;
+    let mut python = Command::new(std::env::current_exe()?);
+    python.arg("python");
+    let python = Lane::start("python", python)?;
     steps.run("power_cut", power_cut)?;
     steps.run("no_std_core_hal", || {
         cargo(&[
@@ -173,9 +181,9 @@ fn ci() -> Result<()> {
     steps.run("python", || python.finish())
 }
 
-/// A step run beside the others: `cargo xtask <step>` as a child process (bounded by
-/// [`CARGO_LIMIT`], killed when dropped unfinished), its output kept in a file under the target
-/// directory and echoed when it ends.
+/// A step run beside the others: a child process (bounded by [`CARGO_LIMIT`], killed when
+/// dropped unfinished), its output kept in a file under the target directory and echoed whole
+/// when it ends, so the log stays readable.
 struct Lane {
     child: proc::Bounded,
     log: std::path::PathBuf,
@@ -183,12 +191,13 @@ struct Lane {
 }
 
 impl Lane {
-    fn start(step: &str) -> Result<Self> {
+    fn start(step: &str, mut cmd: Command) -> Result<Self> {
         let log = qemu::target_dir().join(format!("ci-{step}.log"));
+        if let Some(dir) = log.parent() {
+            std::fs::create_dir_all(dir)?;
+        }
         let file = std::fs::File::create(&log).with_context(|| format!("{}", log.display()))?;
-        let mut cmd = Command::new(std::env::current_exe()?);
-        cmd.arg(step)
-            .stdout(file.try_clone()?)
+        cmd.stdout(file.try_clone()?)
             .stderr(file)
             .stdin(std::process::Stdio::null());
         eprintln!(
@@ -196,7 +205,7 @@ impl Lane {
             log.display()
         );
         Ok(Self {
-            child: proc::Bounded::spawn(&mut cmd, &format!("`cargo xtask {step}`"), CARGO_LIMIT)?,
+            child: proc::Bounded::spawn(&mut cmd, &format!("the {step} step"), CARGO_LIMIT)?,
             log,
             started: Instant::now(),
         })
@@ -231,7 +240,11 @@ pub fn host_build() -> Result<()> {
 /// which builds nothing when the test step ran), from cargo's JSON messages.
 fn host_test_binary(name: &str) -> Result<std::path::PathBuf> {
     let args = [
-        &["test", "--no-run", "--message-format=json-render-diagnostics"][..],
+        &[
+            "test",
+            "--no-run",
+            "--message-format=json-render-diagnostics",
+        ][..],
         &HOST_TESTS,
     ]
     .concat();
