@@ -236,9 +236,11 @@ pub fn host_build() -> Result<()> {
     cargo(&[&["test", "--no-run"][..], &HOST_TESTS].concat())
 }
 
-/// The executable of the integration test `name` in the host build ([`host_build`]'s command,
-/// which builds nothing when the test step ran), from cargo's JSON messages.
-fn host_test_binary(name: &str) -> Result<std::path::PathBuf> {
+/// The host build's artifacts ([`host_build`]'s command, which builds nothing when the test step
+/// ran), as cargo's JSON messages. What that build makes stays under `target/debug/deps` with its
+/// hash (only a `cargo build` of a package copies its outputs up to `target/debug`), so the
+/// steps that use one take its path from here.
+fn host_artifacts() -> Result<Vec<serde_json::Value>> {
     let args = [
         &[
             "test",
@@ -257,18 +259,38 @@ fn host_test_binary(name: &str) -> Result<std::path::PathBuf> {
     if !out.status.success() {
         bail!("the host test build failed ({})", out.status);
     }
-    String::from_utf8_lossy(&out.stdout)
+    Ok(String::from_utf8_lossy(&out.stdout)
         .lines()
         .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .find(|m| {
-            m["reason"] == "compiler-artifact"
-                && m["target"]["name"] == name
-                && m["target"]["kind"]
-                    .as_array()
-                    .is_some_and(|k| k.iter().any(|k| k == "test"))
-        })
+        .filter(|m| m["reason"] == "compiler-artifact")
+        .collect())
+}
+
+/// The executable of the integration test `name` in the host build.
+fn host_test_binary(name: &str) -> Result<std::path::PathBuf> {
+    host_artifacts()?
+        .iter()
+        .find(|m| m["target"]["name"] == name && has_kind(m, "test"))
         .and_then(|m| m["executable"].as_str().map(std::path::PathBuf::from))
         .with_context(|| format!("the host test build has no test binary `{name}`"))
+}
+
+/// The file of kind `kind` (`staticlib`, …) of the library `name` in the host build, by its
+/// extension `ext`.
+pub fn host_library(name: &str, kind: &str, ext: &str) -> Result<std::path::PathBuf> {
+    host_artifacts()?
+        .iter()
+        .filter(|m| m["target"]["name"] == name && has_kind(m, kind))
+        .flat_map(|m| m["filenames"].as_array().cloned().unwrap_or_default())
+        .filter_map(|f| f.as_str().map(std::path::PathBuf::from))
+        .find(|f| f.extension().is_some_and(|e| e == ext))
+        .with_context(|| format!("the host test build has no {kind} of `{name}`"))
+}
+
+fn has_kind(message: &serde_json::Value, kind: &str) -> bool {
+    message["target"]["kind"]
+        .as_array()
+        .is_some_and(|k| k.iter().any(|k| k == kind))
 }
 
 /// Runs the smoke binary under QEMU (with the runner's arguments of `.cargo/config.toml`, bounded

@@ -63,7 +63,7 @@ pub fn ffi() -> Result<()> {
         "warnings",
     ])?;
     cargo(&["build", "-p", "tcomp-ffi", "--target", TARGET, "--release"])?;
-    let host_lib = target_dir.join("debug/libtcomp_ffi.a");
+    let host_lib = crate::host_library("tcomp_ffi", "staticlib", "a")?;
     let arm_lib = target_dir.join(TARGET).join("release/libtcomp_ffi.a");
 
     // The host example against `tcomp eval`.
