@@ -308,22 +308,8 @@ fn smoke() -> Result<()> {
         "smoke",
     ])?;
     let elf = qemu::target_dir().join(TARGET).join("release/smoke");
-    let mut qemu = Command::new("qemu-system-arm");
-    qemu.args([
-        "-cpu",
-        "cortex-m4",
-        "-machine",
-        "mps2-an386",
-        "-nographic",
-        "-monitor",
-        "none",
-        "-semihosting-config",
-        "enable=on,target=native",
-        "-icount",
-        "shift=0",
-        "-kernel",
-    ])
-    .arg(&elf);
+    // One instruction per ns of virtual time (the runner of `.cargo/config.toml` uses the same).
+    let mut qemu = qemu::machine(&elf, "shift=0");
     let out = proc::output(&mut qemu, "the QEMU smoke run", SMOKE_LIMIT)?;
     let text = String::from_utf8_lossy(&out.stdout);
     print!("{text}");

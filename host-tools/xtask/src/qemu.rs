@@ -128,15 +128,12 @@ fn fit_models(work: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The unit's key store, written by `tcomp keygen` beside the images in the work directory and
-/// loaded into the QEMU board's `KEYS` region (`firmware/boards/qemu/memory.x`) as a factory
-/// programs OTP.
-pub const KEY_STORE: &str = "station.otp";
-
-/// QEMU's mps2-an386 running the replay ELF `elf` with `image` loaded at the start of the models
-/// region (slot A), the key store at `KEYS` and `vector` in the replay region, UART 0 on `serial`
-/// (`file:PATH`, `pty`), one instruction per 8 ns of virtual time.
-pub fn qemu_command(elf: &Path, image: &Path, vector: &Path, serial: &str) -> Command {
+/// QEMU's emulation of the board every QEMU run here uses (the smoke run, the replay and update
+/// runs, the C API's replay): the mps2-an386 (a Cortex-M4 with the FPU), no display or monitor,
+/// semihosting for the guest's output and exit code, `elf` loaded as the kernel, and
+/// `-icount icount` (instruction counting: `shift=N` is 2^N ns of virtual time per instruction,
+/// so a run's timing is the same on any host).
+pub fn machine(elf: &Path, icount: &str) -> Command {
     let mut qemu = Command::new("qemu-system-arm");
     qemu.args([
         "-cpu",
@@ -149,27 +146,39 @@ pub fn qemu_command(elf: &Path, image: &Path, vector: &Path, serial: &str) -> Co
         "-semihosting-config",
         "enable=on,target=native",
         "-icount",
-        "shift=3,sleep=off",
-        "-serial",
-        serial,
+        icount,
     ])
     .arg("-kernel")
-    .arg(elf)
-    .arg("-device")
-    .arg(format!(
-        "loader,file={},addr=0x3F0000,force-raw=on",
-        image.display()
-    ))
-    .arg("-device")
-    .arg(format!(
-        "loader,file={},addr=0x21000000,force-raw=on",
-        vector.display()
-    ))
-    .arg("-device")
-    .arg(format!(
-        "loader,file={},addr=0x3EF000,force-raw=on",
-        image.with_file_name(KEY_STORE).display()
-    ));
+    .arg(elf);
+    qemu
+}
+
+/// The unit's key store, written by `tcomp keygen` beside the images in the work directory and
+/// loaded into the QEMU board's `KEYS` region (`firmware/boards/qemu/memory.x`) as a factory
+/// programs OTP.
+pub const KEY_STORE: &str = "station.otp";
+
+/// QEMU's mps2-an386 running the replay ELF `elf` with `image` loaded at the start of the models
+/// region (slot A), the key store at `KEYS` and `vector` in the replay region, UART 0 on `serial`
+/// (`file:PATH`, `pty`), one instruction per 8 ns of virtual time.
+pub fn qemu_command(elf: &Path, image: &Path, vector: &Path, serial: &str) -> Command {
+    let mut qemu = machine(elf, "shift=3,sleep=off");
+    qemu.args(["-serial", serial])
+        .arg("-device")
+        .arg(format!(
+            "loader,file={},addr=0x3F0000,force-raw=on",
+            image.display()
+        ))
+        .arg("-device")
+        .arg(format!(
+            "loader,file={},addr=0x21000000,force-raw=on",
+            vector.display()
+        ))
+        .arg("-device")
+        .arg(format!(
+            "loader,file={},addr=0x3EF000,force-raw=on",
+            image.with_file_name(KEY_STORE).display()
+        ));
     qemu
 }
 

@@ -282,26 +282,8 @@ fn replay_line(text: &str) -> Result<std::collections::HashMap<String, String>> 
 
 /// QEMU's mps2-an386 running `elf` with `vector` at 0x21000000.
 fn qemu(elf: &Path, vector: &Path) -> Command {
-    let mut q = Command::new("qemu-system-arm");
-    q.args([
-        "-cpu",
-        "cortex-m4",
-        "-machine",
-        "mps2-an386",
-        "-nographic",
-        "-monitor",
-        "none",
-    ])
-    .args([
-        "-semihosting-config",
-        "enable=on,target=native",
-        "-icount",
-        "shift=3,sleep=off",
-    ])
-    .arg("-kernel")
-    .arg(elf)
-    .arg("-device")
-    .arg(format!(
+    let mut q = crate::qemu::machine(elf, "shift=3,sleep=off");
+    q.arg("-device").arg(format!(
         "loader,file={},addr=0x21000000,force-raw=on",
         vector.display()
     ));
