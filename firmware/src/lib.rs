@@ -26,6 +26,8 @@ pub mod update;
 pub mod wiring;
 
 #[cfg(test)]
+mod test_flash;
+#[cfg(test)]
 mod trust_tests;
 
 /// FNV-1a over the bits of a record, folded into `hash`: the running output hash both sides print.

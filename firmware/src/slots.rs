@@ -378,55 +378,17 @@ impl<F: NorFlash + MappedFlash> NorFlash for RunTime<F> {
 mod tests {
     extern crate std;
     use super::*;
+    use crate::test_flash::{Flash, Sim};
     use crate::update::{MAX_REPLY, UpdateTask};
     use std::vec;
     use std::vec::Vec;
     use tcomp_core::image::write_image;
-    use tcomp_core::slots::sim::SimNor;
     use tcomp_core::update::wire::{Decoder, MAX_FRAME};
     use tcomp_core::update::{Sender, Status};
-
-    type Sim = SimNor<{ 64 * 1024 }, { 32 * 1024 }>;
 
     /// Accepts any readable image (the trust checks have their own tests, `trust_tests.rs`).
     fn any(_: &[u8]) -> Result<Signer, tcomp_core::update::Reason> {
         Ok(Signer::Unsigned)
-    }
-
-    /// The flash model seen as a board's mapped region.
-    #[derive(Clone)]
-    struct Flash(Sim);
-
-    impl ErrorType for Flash {
-        type Error = <Sim as ErrorType>::Error;
-    }
-
-    impl ReadNorFlash for Flash {
-        const READ_SIZE: usize = 1;
-        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-            self.0.read(offset, bytes)
-        }
-        fn capacity(&self) -> usize {
-            self.0.capacity()
-        }
-    }
-
-    impl NorFlash for Flash {
-        const WRITE_SIZE: usize = <Sim as NorFlash>::WRITE_SIZE;
-        const ERASE_SIZE: usize = <Sim as NorFlash>::ERASE_SIZE;
-        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-            self.0.erase(from, to)
-        }
-        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
-            self.0.write(offset, bytes)
-        }
-    }
-
-    impl MappedFlash for Flash {
-        fn mapped(&self, offset: u32, len: u32) -> Option<&[u8]> {
-            let at = offset as usize;
-            self.0.bytes().get(at..at.checked_add(len as usize)?)
-        }
     }
 
     fn image(seed: u8) -> Vec<u8> {

@@ -9,9 +9,10 @@
 extern crate std;
 use crate::boot::report;
 use crate::slots::{Choice, MappedFlash, QEMU_LAYOUT, Source, boot, choose, confirm};
+use crate::test_flash::{Flash, Sim};
 use crate::trust::{Signer, Trust};
 use crate::update::{MAX_REPLY, UpdateTask};
-use embedded_storage::nor_flash::{ErrorType, NorFlash, ReadNorFlash};
+use embedded_storage::nor_flash::NorFlash;
 use std::io::Read;
 use std::vec;
 use std::vec::Vec;
@@ -19,7 +20,6 @@ use tcomp_board_description::Board;
 use tcomp_core::frame::{DEVELOPMENT, image_state, update_state};
 use tcomp_core::image::sign::{self, BLOCK_LEN, KeyId};
 use tcomp_core::image::{Entry, ImageSpec};
-use tcomp_core::slots::sim::SimNor;
 use tcomp_core::slots::{SlotId, Trial, trial};
 use tcomp_core::update::wire::{Decoder, MAX_FRAME};
 use tcomp_core::update::{Failure, Reason, Sender, Status};
@@ -146,44 +146,6 @@ fn another_key_another_unit_and_no_signature_are_refused() {
         dev.check(&signed(&image(UNIT, 3), &rogue)),
         Err(Reason::UnknownKey)
     );
-}
-
-type Sim = SimNor<{ 64 * 1024 }, { 32 * 1024 }>;
-
-/// The flash model seen as a board's mapped `MODELS` region.
-#[derive(Clone)]
-struct Flash(Sim);
-
-impl ErrorType for Flash {
-    type Error = <Sim as ErrorType>::Error;
-}
-
-impl ReadNorFlash for Flash {
-    const READ_SIZE: usize = 1;
-    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-        self.0.read(offset, bytes)
-    }
-    fn capacity(&self) -> usize {
-        self.0.capacity()
-    }
-}
-
-impl NorFlash for Flash {
-    const WRITE_SIZE: usize = <Sim as NorFlash>::WRITE_SIZE;
-    const ERASE_SIZE: usize = <Sim as NorFlash>::ERASE_SIZE;
-    fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-        self.0.erase(from, to)
-    }
-    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
-        self.0.write(offset, bytes)
-    }
-}
-
-impl MappedFlash for Flash {
-    fn mapped(&self, offset: u32, len: u32) -> Option<&[u8]> {
-        let at = offset as usize;
-        self.0.bytes().get(at..at.checked_add(len as usize)?)
-    }
 }
 
 /// An update of `image` through the update task, validated by `trust` at COMMIT.
