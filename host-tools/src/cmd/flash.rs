@@ -122,6 +122,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             .timeout_ms
             .map_or_else(|| reply_timeout(baud), Duration::from_millis),
         commit: Duration::from_millis(args.commit_timeout_ms),
+        reset: link::RESET_ERASE,
     };
     let port_name = args.port.to_string_lossy().into_owned();
     let mut port = serialport::new(&port_name, baud)
@@ -133,11 +134,18 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .with_context(|| format!("--port {port_name}: cannot clear its input"))?;
     let bar = super::progress::Bar::new(args.quiet || args.json);
     bar.start("sending", image.len() as u64, Unit::Bytes);
-    let outcome = link::transfer(&mut port, &image, session(), timing, |sent, _| {
-        bar.set(u64::from(sent))
-    })
-    .with_context(|| format!("--port {port_name}"))?;
+    let (outcome, through_reset) =
+        link::transfer_through_reset(&mut port, &image, session(), timing, |sent, _| {
+            bar.set(u64::from(sent))
+        })
+        .with_context(|| format!("--port {port_name}"))?;
     bar.clear();
+    if through_reset && !args.json && !args.quiet {
+        eprintln!(
+            "--port {port_name}: the unit's slot held an earlier session's bytes; it reset, its \
+             boot erased the slot, and the image was sent again"
+        );
+    }
     let info = outcome.info;
     let serial = info.map(|i| String::from_utf8_lossy(i.serial()).into_owned());
     let slot_name = |i: u8| if i == 0 { "A" } else { "B" };
@@ -190,6 +198,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "generation": generation,
             "result": "ok",
             "repeats": outcome.repeats,
+            "sent_again_after_reset": through_reset,
             "output_frames": outcome.output.frames,
             "output_lost": outcome.output.lost,
             "output_first_sequence": outcome.first_sequence,

@@ -13,8 +13,10 @@
 //! stay bit-exact) and say so in the boot report it sends at once (last update refused, and why).
 //! The refused session leaves slot B written, and nothing erases while the loop runs: the good
 //! image's first BEGIN is refused (`flash error`), the unit resets once that reply has left, its
-//! boot erases slot B before the watchdog starts, and `tcomp flash` is run again (as a user
-//! would); that boot replays the vector from its start, compared bit for bit as before.
+//! boot erases slot B before the watchdog starts, and the same `tcomp flash` waits for the unit's
+//! first sample after that boot and sends the image again (it must say so:
+//! `sent_again_after_reset`); that boot replays the vector from its start, compared bit for bit
+//! as before.
 
 use crate::field;
 use crate::proc::{self, Bounded};
@@ -32,8 +34,6 @@ use std::time::Duration;
 const REPLY_TIMEOUT_MS: &str = "3000";
 /// The whole `tcomp flash`: about 1 s of wall time for a 6-channel image.
 const FLASH_LIMIT: Duration = proc::minutes(4);
-/// The unit's reset after it refused a BEGIN whose slot needs the boot's erase.
-const RESET_WAIT: Duration = Duration::from_secs(2);
 /// QEMU naming its pty: at once.
 const PTY_LIMIT: Duration = Duration::from_secs(30);
 
@@ -54,29 +54,23 @@ pub fn run(
     let (mut qemu, stdout, pty) = start_qemu(elf, initial, vector)?;
     let log = proc::collect(stdout);
     refused(work, &pty, rogue)?;
-    let mut flash = flash(work, &pty, update, "`tcomp flash` over QEMU's pty")?;
-    let mut report = String::from_utf8_lossy(&flash.stdout).into_owned();
+    let flash = flash(work, &pty, update, "`tcomp flash` over QEMU's pty")?;
+    let report = String::from_utf8_lossy(&flash.stdout).into_owned();
     print!("{report}");
-    if !flash.status.success() && report.contains("the unit refused: flash error") {
-        // The refused session left slot B written, and nothing erases while the loop runs: the
-        // unit refused the BEGIN and resets once the refusal has left, its boot erases slot B
-        // (before the watchdog starts), and the second attempt goes through. That boot starts
-        // the vector again, compared as the first boot's was.
-        println!(
-            "update after the refused one: the unit resets to erase slot B at boot; sending again"
-        );
-        // Its reset and boot take milliseconds of guest time; waiting generously keeps the second
-        // run from seeing the first boot's last frames (their sequence numbers start again).
-        std::thread::sleep(RESET_WAIT);
-        flash = self::flash(work, &pty, update, "`tcomp flash` over QEMU's pty, again")?;
-        report = String::from_utf8_lossy(&flash.stdout).into_owned();
-        print!("{report}");
-    }
     // The firmware holds its loop until the update commits, then ends its run; if `tcomp flash`
     // failed, QEMU is killed when `qemu` is dropped.
     if !flash.status.success() || !report.contains("\"result\": \"ok\"") {
         bail!("tcomp flash over QEMU's pty failed ({})", flash.status);
     }
+    // The refused session left slot B written: the unit refused the first BEGIN, reset, its boot
+    // erased slot B (before the watchdog starts), and `tcomp flash` sent the image again.
+    if !report.contains("\"sent_again_after_reset\": true") {
+        bail!("tcomp flash did not go through the unit's reset and boot erase of slot B");
+    }
+    println!(
+        "update after the refused one: the unit reset to erase slot B at boot, `tcomp flash` \
+         waited for its first sample and sent the image again"
+    );
     let qemu_status = qemu.wait()?;
     let bytes = log.join().unwrap_or_default();
     let text = crate::defmt::decode(elf, &bytes)?;
