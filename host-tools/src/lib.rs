@@ -10,6 +10,11 @@
 //! a reader of the command needs it, not as a library's API, hence the lint below.
 #![allow(missing_docs)]
 
+// First, so that its `outln!`/`out!` macros are in scope in the modules declared after it.
+#[macro_use]
+pub mod output;
+
+pub mod args;
 pub mod calibrate;
 pub mod cmd;
 pub mod demo;

@@ -63,7 +63,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = run(cli.command);
-    let output = cmd::stdout::finish();
+    let output = tcomp::output::stdout::finish();
     match (result, output) {
         (Err(err), _) => {
             eprintln!("error: {}", message(&err));

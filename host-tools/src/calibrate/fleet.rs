@@ -21,7 +21,7 @@ use super::channel::Settings;
 use super::spec::{CalSpec, ChannelPlan, DataSource};
 use super::unit::{self, UnitData};
 use crate::cmd::calibrate::Args;
-use crate::cmd::output::Staging;
+use crate::output::files::Staging;
 use anyhow::{Context, bail};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -366,7 +366,8 @@ pub fn run(
     }
     let settings = args.settings();
     let staging = Staging::new("--out", &args.out)?;
-    let bar = crate::cmd::progress::counter(args.quiet, "calibrating", units.len() as u64, "units");
+    let bar =
+        crate::output::progress::counter(args.quiet, "calibrating", units.len() as u64, "units");
     let rows = units
         .par_iter()
         .map(|e| {
@@ -392,11 +393,11 @@ pub fn write_fleet(
     let fleet = analyse(plans, rows);
     let html = crate::render::html::fleet::page(&fleet, spec);
     std::fs::write(into.join("fleet.html"), html).context("writing fleet.html")?;
-    let subject = crate::cmd::json::Subject {
+    let subject = crate::output::json::Subject {
         data: Some(units.display().to_string()),
         ..Default::default()
     };
-    let json = serde_json::to_string_pretty(&crate::cmd::json::Output {
+    let json = serde_json::to_string_pretty(&crate::output::json::Output {
         command: "calibrate",
         subject: &subject,
         body: &serde_json::json!({ "fleet": &fleet }),

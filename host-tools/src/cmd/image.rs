@@ -367,11 +367,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(key) = &args.sign {
         inputs.push(("--sign", key.as_path()));
     }
-    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
-    super::output::check_file_output("--out", &args.out)?;
+    crate::output::files::refuse_overwriting_inputs(
+        "--out",
+        std::slice::from_ref(&args.out),
+        &inputs,
+    )?;
+    crate::output::files::check_file_output("--out", &args.out)?;
     tcomp_train::blob_io::write_atomic(&args.out, &image)?;
     if args.json {
-        let subject = super::json::Subject {
+        let subject = crate::output::json::Subject {
             models: blobs.iter().map(|b| b.path.display().to_string()).collect(),
             ..Default::default()
         };
@@ -390,7 +394,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 })
                 .collect(),
         };
-        return super::json::print("image", &subject, &body);
+        return crate::output::json::print("image", &subject, &body);
     }
     if args.quiet {
         return Ok(());
@@ -400,7 +404,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         args.out.display(),
         image.len(),
         blobs.len(),
-        super::printable::text(&board.name),
+        crate::output::printable::text(&board.name),
         board.hash(),
         args.serial,
         signer.map_or("unsigned".to_string(), |k| format!("signed by key {k}")),
