@@ -18,4 +18,5 @@ pub mod args;
 pub mod calibrate;
 pub mod cmd;
 pub mod demo;
+pub mod image;
 pub mod render;
