@@ -5,6 +5,7 @@
 //! outputs are staged and renamed into `--out` at the end ([`crate::output::files::Staging`]): a failed
 //! run leaves `--out` as it was. The work itself is in [`crate::calibrate`].
 use crate::calibrate::channel::Settings;
+use crate::calibrate::fleet::FleetOptions;
 use crate::calibrate::spec::CalSpec;
 use crate::calibrate::unit::{self, UnitData, UnitResult};
 use crate::calibrate::{summary, table};
@@ -73,7 +74,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let board = spec.board.as_deref().map(Board::load).transpose()?;
     let plans = unit::apply_board(&spec, board.as_ref())?;
     if let Some(dir) = &args.units {
-        let (fleet, json) = crate::calibrate::fleet::run(args, &spec, &plans, board.as_ref(), dir)?;
+        let options = FleetOptions {
+            out: &args.out,
+            settings: args.settings(),
+            quiet: args.quiet,
+        };
+        let (fleet, json) =
+            crate::calibrate::fleet::run(&options, &spec, &plans, board.as_ref(), dir)?;
         print_fleet(args, &fleet, &json);
         return Ok(());
     }
