@@ -2,7 +2,8 @@
 //!
 //! Each subcommand lives in its own module under `cmd/`; `main` only parses arguments and dispatches.
 //! What several commands show (candidate table, diagnosis text, HTML report) is written once in
-//! `render/`; the built-in demo's narrative is `demo/`.
+//! `render/`; the built-in demo's narrative is `demo/`; the helpers the commands share (output,
+//! shared arguments, image building) are `output/`, `args/` and `image.rs`, below the commands.
 //!
 //! A user error is not a crash: `main` prints the error and its causes on one line (`error: …`) on
 //! stderr and exits with 1, whatever `RUST_BACKTRACE` says; bad usage exits with clap's 2. A panic
@@ -63,7 +64,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = run(cli.command);
-    let output = cmd::stdout::finish();
+    let output = tcomp::output::stdout::finish();
     match (result, output) {
         (Err(err), _) => {
             eprintln!("error: {}", message(&err));

@@ -10,7 +10,7 @@ use crate::errors::{TcompError, type_error};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyFloat, PyInt, PyList, PyString, PyTuple};
-use tcomp::cmd::run::RunArgs;
+use tcomp::args::run::RunArgs;
 use tcomp_discover::DiagnoseOptions;
 use tcomp_train::layer::Layer;
 use tcomp_train::{Dataset, RunOptions, Spec};

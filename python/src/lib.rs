@@ -78,7 +78,7 @@ fn evaluate(
             let gap = eval.run.run.gap;
             let report = tcomp_train::evaluate(&model, &data, &roles, eval.bin_s, t, gap)?;
             let run = tcomp_train::metrics::run_model(&model, &data, &roles, t, gap)?;
-            let figures = tcomp::cmd::json::RunFigures::from(&report);
+            let figures = tcomp::output::json::RunFigures::from(&report);
             let bytes = run.residual.iter().flat_map(|v| v.to_le_bytes()).collect();
             Ok((bytes, serde_json::to_string(&figures)?))
         })

@@ -9,7 +9,7 @@
 
 use super::ship::{self, Choice};
 use super::spec::ChannelPlan;
-use crate::cmd::json::RunFigures;
+use crate::output::json::RunFigures;
 use anyhow::Context;
 use tcomp_discover::{Analysis, DiagnoseOptions, Verdict};
 use tcomp_train::metrics::{self, Run};

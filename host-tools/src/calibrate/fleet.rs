@@ -20,8 +20,7 @@
 use super::channel::Settings;
 use super::spec::{CalSpec, ChannelPlan, DataSource};
 use super::unit::{self, UnitData};
-use crate::cmd::calibrate::Args;
-use crate::cmd::output::Staging;
+use crate::output::files::Staging;
 use anyhow::{Context, bail};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -347,26 +346,38 @@ fn one(
     })
 }
 
+/// How a fleet is run: what [`run`] takes of `tcomp calibrate`'s arguments.
+#[derive(Clone, Copy, Debug)]
+pub struct FleetOptions<'a> {
+    /// The output folder: one folder per unit, the fleet page and `fleet.json`.
+    pub out: &'a Path,
+    /// How each unit's channels are run.
+    pub settings: Settings,
+    /// No progress display.
+    pub quiet: bool,
+}
+
 /// Runs every unit of `dir` and writes the fleet page and `fleet.json`; returns the fleet and
 /// the JSON.
 pub fn run(
-    args: &Args,
+    options: &FleetOptions<'_>,
     spec: &CalSpec,
     plans: &[ChannelPlan],
     board: Option<&Board>,
     dir: &Path,
 ) -> anyhow::Result<(Fleet, String)> {
     let units = units_in(spec, dir)?;
-    if let Some(e) = units.iter().find(|e| args.out.join(&e.name).exists()) {
+    if let Some(e) = units.iter().find(|e| options.out.join(&e.name).exists()) {
         bail!(
             "--out {} already holds {}: choose a fresh output folder",
-            args.out.display(),
+            options.out.display(),
             e.name
         );
     }
-    let settings = args.settings();
-    let staging = Staging::new("--out", &args.out)?;
-    let bar = crate::cmd::progress::counter(args.quiet, "calibrating", units.len() as u64, "units");
+    let settings = options.settings;
+    let staging = Staging::new("--out", options.out)?;
+    let bar =
+        crate::output::progress::counter(options.quiet, "calibrating", units.len() as u64, "units");
     let rows = units
         .par_iter()
         .map(|e| {
@@ -392,11 +403,11 @@ pub fn write_fleet(
     let fleet = analyse(plans, rows);
     let html = crate::render::html::fleet::page(&fleet, spec);
     std::fs::write(into.join("fleet.html"), html).context("writing fleet.html")?;
-    let subject = crate::cmd::json::Subject {
+    let subject = crate::output::json::Subject {
         data: Some(units.display().to_string()),
         ..Default::default()
     };
-    let json = serde_json::to_string_pretty(&crate::cmd::json::Output {
+    let json = serde_json::to_string_pretty(&crate::output::json::Output {
         command: "calibrate",
         subject: &subject,
         body: &serde_json::json!({ "fleet": &fleet }),

@@ -1,11 +1,11 @@
 //! `summary.json`: what `tcomp calibrate` did for each channel, in the tool's one JSON vocabulary
-//! (inside [`crate::cmd::json::Output`], `null` where there is no data, `change_pct` negative when
+//! (inside [`crate::output::json::Output`], `null` where there is no data, `change_pct` negative when
 //! the residual fell), validated by `schema/tcomp-output.schema.json`.
 
 use super::channel::ChannelResult;
 use super::ship::Shipped;
 use super::unit::{UnitResult, blob_name};
-use crate::cmd::json::{self, Subject};
+use crate::output::json::{self, Subject};
 use serde::Serialize;
 
 /// What the report and the JSON say about the shipping gate.

@@ -2,7 +2,7 @@
 //! poly3 and the model, what ships and the change it brings, then every flag in capitals.
 
 use super::unit::UnitResult;
-use crate::cmd::json;
+use crate::output::json;
 use crate::render::num::{num, pct};
 use std::fmt::Write as _;
 
@@ -16,7 +16,7 @@ pub fn text(u: &UnitResult) -> String {
     );
     let n = |v: Option<f64>, unit: &str| v.map_or_else(|| "no data".into(), |v| num(v, unit));
     for c in &u.channels {
-        let unit = crate::cmd::printable::text(&c.unit);
+        let unit = crate::output::printable::text(&c.unit);
         let f = &c.model.figures;
         let status = if c.choice.flags.is_empty() {
             "ok".to_string()
@@ -26,7 +26,7 @@ pub fn text(u: &UnitResult) -> String {
         let _ = writeln!(
             t,
             "{:<16} {:>14} {:>14} {:>14} {:>8} {:>14} {:>9}  {status}",
-            crate::cmd::printable::text(&c.plan.name),
+            crate::output::printable::text(&c.plan.name),
             n(f.raw_rms, &unit),
             n(c.poly3.figures.residual_rms, &unit),
             n(f.residual_rms, &unit),

@@ -9,7 +9,7 @@
 use super::channel::{self, ChannelResult, Settings, Windows};
 use super::ship::Shipped;
 use super::spec::{CalSpec, ChannelPlan, DataSource};
-use crate::cmd::image::{self, ChannelBlob};
+use crate::image::{self, ChannelBlob};
 use anyhow::{Context, bail};
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};

@@ -128,21 +128,21 @@ fn print_rows(rows: &[Row], from: f64) {
         };
         outln!(
             "{:<22} {:>5} {:>13} {:>11.4e} {:>15.4e} {:>13}  {}",
-            super::printable::text(&a.column),
+            crate::output::printable::text(&a.column),
             a.rows,
             format!("{:.1}–{:.1}", a.held_out_range[0], a.held_out_range[1]),
             a.raw_std,
             a.cubic_std,
             t,
-            super::printable::text(&r.diagnosis)
+            crate::output::printable::text(&r.diagnosis)
         );
     }
     for r in rows {
         if let Err(e) = &r.tcomp_std {
             outln!(
                 "{}: tcomp's model: {}",
-                super::printable::text(&r.autopilot.column),
-                super::printable::text(e)
+                crate::output::printable::text(&r.autopilot.column),
+                crate::output::printable::text(e)
             );
         }
     }
@@ -150,8 +150,8 @@ fn print_rows(rows: &[Row], from: f64) {
 
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    super::output::check_file_output("--out", &args.out)?;
-    super::output::refuse_overwriting_inputs(
+    crate::output::files::check_file_output("--out", &args.out)?;
+    crate::output::files::refuse_overwriting_inputs(
         "--out",
         std::slice::from_ref(&args.out),
         &[("--data", args.data.as_path())],

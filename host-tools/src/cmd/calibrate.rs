@@ -2,13 +2,14 @@
 //! and pack a whole unit (or a folder of units) in one command.
 //!
 //! Everything is checked (the spec, the board, the data) before anything is written, and the
-//! outputs are staged and renamed into `--out` at the end ([`super::output::Staging`]): a failed
+//! outputs are staged and renamed into `--out` at the end ([`crate::output::files::Staging`]): a failed
 //! run leaves `--out` as it was. The work itself is in [`crate::calibrate`].
-use super::output::Staging;
 use crate::calibrate::channel::Settings;
+use crate::calibrate::fleet::FleetOptions;
 use crate::calibrate::spec::CalSpec;
 use crate::calibrate::unit::{self, UnitData, UnitResult};
 use crate::calibrate::{summary, table};
+use crate::output::files::Staging;
 use anyhow::Context;
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
@@ -73,7 +74,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let board = spec.board.as_deref().map(Board::load).transpose()?;
     let plans = unit::apply_board(&spec, board.as_ref())?;
     if let Some(dir) = &args.units {
-        let (fleet, json) = crate::calibrate::fleet::run(args, &spec, &plans, board.as_ref(), dir)?;
+        let options = FleetOptions {
+            out: &args.out,
+            settings: args.settings(),
+            quiet: args.quiet,
+        };
+        let (fleet, json) =
+            crate::calibrate::fleet::run(&options, &spec, &plans, board.as_ref(), dir)?;
         print_fleet(args, &fleet, &json);
         return Ok(());
     }
@@ -105,8 +112,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .iter()
         .map(|f| args.out.join(f))
         .collect();
-    super::output::refuse_overwriting_inputs("--out", &outputs, &inputs)?;
-    let bar = super::progress::counter(args.quiet, "calibrating", plans.len() as u64, "channels");
+    crate::output::files::refuse_overwriting_inputs("--out", &outputs, &inputs)?;
+    let bar =
+        crate::output::progress::counter(args.quiet, "calibrating", plans.len() as u64, "channels");
     let u = unit::run(
         &plans,
         data,
@@ -120,7 +128,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let json = write_unit(&u, &spec, board.as_ref(), staging.path())?;
     staging.commit()?;
     if args.json {
-        outln!("{}", super::printable::json(&json));
+        outln!("{}", crate::output::printable::json(&json));
     } else if !args.quiet {
         out!("{}", table::text(&u));
         outln!("wrote {}", args.out.display());
@@ -149,7 +157,7 @@ pub fn write_unit(
 /// The fleet's outcome: its JSON, or a line and one line per outlier.
 fn print_fleet(args: &Args, fleet: &crate::calibrate::fleet::Fleet, json: &str) {
     if args.json {
-        outln!("{}", super::printable::json(json));
+        outln!("{}", crate::output::printable::json(json));
         return;
     }
     if args.quiet {

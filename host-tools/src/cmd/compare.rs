@@ -1,6 +1,6 @@
 //! `tcomp compare MODEL_A MODEL_B --data FILE [--json]`: before/after, overall and per segment.
-use super::json::{self, RunFigures, Subject};
-use super::run::RunArgs;
+use crate::args::run::RunArgs;
+use crate::output::json::{self, RunFigures, Subject};
 use crate::render::num::{SIG, num, pct, plain};
 use clap::Args as ClapArgs;
 use serde::Serialize;
@@ -19,7 +19,7 @@ pub struct Args {
     #[command(flatten)]
     pub run: RunArgs,
     /// Bin length (s) of the binned figures.
-    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
+    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = crate::args::check::interval_s)]
     pub bin: f64,
     /// Column for segment detection [default: model A's first input].
     #[arg(long)]
@@ -98,7 +98,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(args.bin > 0.0, "--bin must be positive");
     args.run.check_window()?;
     let (_, first) = time_and_first_input(&args.model_a)?;
-    let progress = super::progress::spinner(args.quiet, "loading data");
+    let progress = crate::output::progress::spinner(args.quiet, "loading data");
     let bytes_a = tcomp_train::blob_io::read(&args.model_a)?;
     let model_a = tcomp_train::blob_io::decode(&args.model_a, &bytes_a)?;
     let data = args.run.load(&model_a, args.quiet || args.json)?;
@@ -158,12 +158,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 /// The human table: both models' figures, then each segment, every change negative when B's
 /// residual is smaller.
 fn print_text(args: &Args, c: &Comparison, unit: &str) {
-    let unit = super::printable::text(unit);
+    let unit = crate::output::printable::text(unit);
     let n = |v: Option<f64>| v.map_or_else(|| "no data".into(), |v| num(v, &unit));
     outln!(
         "A = {}\nB = {}",
-        super::printable::text(&args.model_a.display().to_string()),
-        super::printable::text(&args.model_b.display().to_string())
+        crate::output::printable::text(&args.model_a.display().to_string()),
+        crate::output::printable::text(&args.model_b.display().to_string())
     );
     outln!("{:<26} {:>16} {:>16} {:>9}", "", "A", "B", "change");
     outln!(

@@ -1,6 +1,6 @@
 //! `tcomp demo [--out DIR]`: the discovery loop on a simulated IFOG, no user data needed.
-use super::json::{self, RunFigures, Subject};
 use crate::demo::{DemoOptions, run as run_demo};
+use crate::output::json::{self, RunFigures, Subject};
 use clap::Args as ClapArgs;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -12,10 +12,10 @@ pub struct Args {
     #[arg(long, default_value = "tcomp-demo")]
     pub out: PathBuf,
     /// Simulation seed.
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = super::check::seed)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = crate::args::check::seed)]
     pub seed: u64,
     /// Output step of the simulated runs (s); larger is quicker and coarser.
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = super::check::demo_step_s)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = crate::args::check::demo_step_s)]
     pub step: f64,
     /// Print JSON (the figures before and after on the verification run) instead of the story.
     #[arg(long)]
@@ -45,7 +45,7 @@ struct Found {
 /// moved into `--out` only when the whole loop succeeded, so a failed run leaves the files of an
 /// earlier run as they were. The demo reads no input, so no output can overwrite one.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let staging = super::output::Staging::new("--out", &args.out)?;
+    let staging = crate::output::files::Staging::new("--out", &args.out)?;
     let staged = staging.path().display().to_string();
     let shown = args.out.display().to_string();
     let opts = DemoOptions {

@@ -1,7 +1,7 @@
 //! `tcomp diagnose --model MODEL --data FILE [--verify FILE] [--json]`: where the model fails and
 //! which physical effect is most likely missing, with the evidence and a stated criterion.
-use super::json::{self, Subject};
-use super::run::RunArgs;
+use crate::args::run::RunArgs;
+use crate::output::json::{self, Subject};
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
 use tcomp_discover::{Analysis, DiagnoseOptions};
@@ -23,16 +23,16 @@ pub struct Args {
     #[arg(long)]
     pub temperature: Option<String>,
     /// Averaging bin before scoring (s).
-    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
+    #[arg(long, default_value_t = 60.0, allow_negative_numbers = true, value_parser = crate::args::check::interval_s)]
     pub bin: f64,
     /// Minimum Δ log evidence of the verdict.
-    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = super::check::min_evidence)]
+    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = crate::args::check::min_evidence)]
     pub min_evidence: f64,
     /// Minimum held-out improvement (%) of the verdict.
-    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = super::check::percent)]
+    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = crate::args::check::percent)]
     pub min_improvement: f64,
     /// Candidates printed.
-    #[arg(long, default_value_t = 10, allow_negative_numbers = true, value_parser = super::check::top)]
+    #[arg(long, default_value_t = 10, allow_negative_numbers = true, value_parser = crate::args::check::top)]
     pub top: usize,
     /// Rounds: after an effect is confirmed, refit the model with it (as `tcomp fit --feature`
     /// would, on the same rows) and diagnose again, until nothing passes or N rounds ran.
@@ -49,7 +49,7 @@ pub struct Args {
 /// Runs the diagnosis (shared with `report`) on the rows of `--from/--until`.
 pub fn analyse(args: &Args) -> anyhow::Result<(Analysis, Dataset)> {
     let p = prepare(args)?;
-    let progress = super::progress::spinner(args.quiet, "diagnosing");
+    let progress = crate::output::progress::spinner(args.quiet, "diagnosing");
     let a = tcomp_discover::diagnose(&p.model()?, &p.data, p.verify.as_ref(), &p.opts)?;
     progress.finish_and_clear();
     Ok((a, p.data))
@@ -157,7 +157,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         // The model's target, unit and features come from the blob: no raw control characters.
         out!(
             "{}",
-            super::printable::lines(&crate::render::diagnosis::text(&a, args.top))
+            crate::output::printable::lines(&crate::render::diagnosis::text(&a, args.top))
         );
     }
     Ok(())
@@ -166,7 +166,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 /// `--rounds N`: each round's diagnosis, what it added, the features after the last.
 fn run_rounds(args: &Args) -> anyhow::Result<()> {
     let p = prepare(args)?;
-    let progress = super::progress::spinner(args.quiet, "diagnosing, round by round");
+    let progress = crate::output::progress::spinner(args.quiet, "diagnosing, round by round");
     let r = tcomp_discover::diagnose_rounds(
         &p.model()?,
         &p.data,
@@ -209,14 +209,14 @@ fn run_rounds(args: &Args) -> anyhow::Result<()> {
         outln!("══ round {} ══", k + 1);
         out!(
             "{}",
-            super::printable::lines(&crate::render::diagnosis::text(a, args.top))
+            crate::output::printable::lines(&crate::render::diagnosis::text(a, args.top))
         );
         if let Some(x) = r.applied.iter().find(|x| x.round == k + 1) {
             outln!(
                 "round {} adds {}: the next round starts from a refit with --feature {}",
                 x.round,
-                super::printable::lines(&x.effect),
-                super::printable::lines(&x.features.join(" --feature "))
+                crate::output::printable::lines(&x.effect),
+                crate::output::printable::lines(&x.features.join(" --feature "))
             );
         }
         outln!();
@@ -224,7 +224,7 @@ fn run_rounds(args: &Args) -> anyhow::Result<()> {
     outln!("stopped: {}", r.stopped);
     outln!(
         "features after the rounds: {}",
-        super::printable::lines(&r.final_features.join(", "))
+        crate::output::printable::lines(&r.final_features.join(", "))
     );
     Ok(())
 }

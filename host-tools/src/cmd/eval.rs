@@ -2,8 +2,8 @@
 //!
 //! The run is streamed ([`tcomp_train::eval_stream`]): memory stays bounded whatever the log's
 //! length, and the figures and errors are those of loading it whole.
-use super::json::{self, RunFigures, Subject};
-use super::run::RunArgs;
+use crate::args::run::RunArgs;
+use crate::output::json::{self, RunFigures, Subject};
 use crate::render::num::{SIG, num, pct, plain, signed};
 use clap::Args as ClapArgs;
 use std::path::PathBuf;
@@ -19,7 +19,7 @@ pub struct Args {
     #[command(flatten)]
     pub run: RunArgs,
     /// Bin length (s) of the binned figures.
-    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = super::check::interval_s)]
+    #[arg(long, default_value_t = 100.0, allow_negative_numbers = true, value_parser = crate::args::check::interval_s)]
     pub bin: f64,
     /// Column for segment detection [default: the program's first input].
     #[arg(long)]
@@ -38,7 +38,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let bytes = tcomp_train::blob_io::read(&args.model)?;
     let model = tcomp_train::blob_io::decode(&args.model, &bytes)?;
     let roles = args.run.roles(&model);
-    let progress = super::progress::spinner(args.quiet, "evaluating");
+    let progress = crate::output::progress::spinner(args.quiet, "evaluating");
     let report = tcomp_train::eval_stream(
         &args.run.data,
         &model,
@@ -62,7 +62,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         json::print("eval", &subject, &RunFigures::from(&report))?;
     } else {
         let unit = subject.unit.as_deref().unwrap_or("");
-        print_report(&report, &super::printable::text(unit));
+        print_report(&report, &crate::output::printable::text(unit));
     }
     Ok(())
 }

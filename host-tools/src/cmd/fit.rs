@@ -1,6 +1,6 @@
 //! `tcomp fit --data FILE ... --out MODEL`: train a model and write its blob atomically.
-use super::json::{self, RunFigures, Subject};
-use super::run::RunArgs;
+use crate::args::run::RunArgs;
+use crate::output::json::{self, RunFigures, Subject};
 use crate::render::num::{SIG, num, pct, plain};
 use anyhow::Context;
 use clap::Args as ClapArgs;
@@ -45,12 +45,16 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let data_path = args.run.data.as_path();
-    super::output::check_file_output("--out", &args.out)?;
+    crate::output::files::check_file_output("--out", &args.out)?;
     let mut inputs = vec![("--data", data_path)];
     if let Some(spec) = &args.spec {
         inputs.push(("--spec", spec.as_path()));
     }
-    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)?;
+    crate::output::files::refuse_overwriting_inputs(
+        "--out",
+        std::slice::from_ref(&args.out),
+        &inputs,
+    )?;
     let file_spec = match &args.spec {
         Some(p) => Spec::load(p)?,
         None => Spec::default(),
@@ -62,7 +66,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         method: args.method.clone(),
     };
     let opts = FitOptions::from_spec(&file_spec.merged(flags))?;
-    let progress = super::progress::Bar::new(args.quiet);
+    let progress = crate::output::progress::Bar::new(args.quiet);
     let data = Dataset::load_with(data_path, &opts.load_options(), &progress)?;
     let fitted = tcomp_train::fit_with_progress(&data, &opts, &progress)?;
     let bytes = fitted.model.to_bytes()?;
@@ -94,7 +98,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
         if !args.quiet {
             let unit = crate::render::num::unit_or_column(&opts.unit, &opts.target);
-            print_summary(s, &args.out, &super::printable::text(&unit));
+            print_summary(s, &args.out, &crate::output::printable::text(&unit));
         }
     }
     Ok(())

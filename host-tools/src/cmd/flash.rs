@@ -98,7 +98,7 @@ fn baud(args: &Args, image: &Image<'_>) -> anyhow::Result<u32> {
             args.image.display(),
             h.board_hash,
             path.display(),
-            super::printable::text(&board.name),
+            crate::output::printable::text(&board.name),
             board.hash()
         );
     }
@@ -132,7 +132,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     // Whatever arrived before the port was raw is stale.
     port.clear(serialport::ClearBuffer::Input)
         .with_context(|| format!("--port {port_name}: cannot clear its input"))?;
-    let bar = super::progress::Bar::new(args.quiet || args.json);
+    let bar = crate::output::progress::Bar::new(args.quiet || args.json);
     bar.start("sending", image.len() as u64, Unit::Bytes);
     let (outcome, through_reset) =
         link::transfer_through_reset(&mut port, &image, session(), timing, |sent, _| {

@@ -2,14 +2,14 @@
 //! A calibration image (`tcomp image`'s output, told apart by its magic) is printed by
 //! [`super::inspect_image`].
 //!
-//! Every string taken from the blob goes through [`super::printable`], in the table and in `--json`:
+//! Every string taken from the blob goes through [`crate::output::printable`], in the table and in `--json`:
 //! a blob is a file from elsewhere, and its strings must not drive the terminal.
 use clap::Args as ClapArgs;
 use serde_json::json;
 use std::path::PathBuf;
 use tcomp_core::HostModel;
 
-use super::printable::text;
+use crate::output::printable::text;
 
 /// Arguments of `tcomp inspect`.
 #[derive(ClapArgs)]
@@ -42,7 +42,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let value = blob_json(args, &bytes, &m);
         outln!(
             "{}",
-            super::printable::json(&serde_json::to_string_pretty(&value)?)
+            crate::output::printable::json(&serde_json::to_string_pretty(&value)?)
         );
         return Ok(());
     }

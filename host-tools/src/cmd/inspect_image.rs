@@ -3,14 +3,14 @@
 //! or `NO_MODEL` and why — decided by the same checks the firmware makes (`Image::parse`, the
 //! blob's own decode, `ChannelRow::accepts`).
 //!
-//! Every string taken from the image goes through [`super::printable`]: an image is a file from
+//! Every string taken from the image goes through [`crate::output::printable`]: an image is a file from
 //! elsewhere, and its strings must not drive the terminal.
 use serde_json::{Value, json};
 use std::path::Path;
 use tcomp_core::image::sign::{self, KeyStore, SignatureError};
 use tcomp_core::image::{ChannelRow, Image, Source, ThermKind};
 
-use super::printable::text;
+use crate::output::printable::text;
 
 /// What channel `row` will run: `Ok(description)` or `Err(reason for NO_MODEL)`.
 fn verdict(image: &Image<'_>, row: &ChannelRow<'_>) -> Result<Value, String> {
@@ -157,7 +157,7 @@ pub fn run(file: &Path, bytes: &[u8], json_out: bool, keys: &[[u8; 32]]) -> anyh
     if json_out {
         outln!(
             "{}",
-            super::printable::json(&serde_json::to_string_pretty(&v)?)
+            crate::output::printable::json(&serde_json::to_string_pretty(&v)?)
         );
         return if failed { Err(verdict()) } else { Ok(()) };
     }

@@ -1,25 +1,14 @@
-//! One module per subcommand.
-
-/// `println!` for command output, through [`stdout::write`]: never panics on a closed pipe.
-macro_rules! outln {
-    () => {
-        $crate::cmd::stdout::write(format_args!("\n"))
-    };
-    ($($arg:tt)*) => {
-        $crate::cmd::stdout::write(format_args!("{}\n", format_args!($($arg)*)))
-    };
-}
-
-/// `print!` for command output, through [`stdout::write`].
-macro_rules! out {
-    ($($arg:tt)*) => {
-        $crate::cmd::stdout::write(format_args!($($arg)*))
-    };
-}
+//! One module per subcommand, and nothing else: each holds its command's clap arguments and its
+//! `run` (`inspect_image` and `simulate_units` are parts of `inspect` and `simulate`).
+//!
+//! Why nothing else: commands sit on top and helpers below. What several commands share (the
+//! output helpers in [`crate::output`], the shared arguments in [`crate::args`], the image
+//! building in [`crate::image`], the rendering in [`crate::render`], the calibration in
+//! [`crate::calibrate`]) lives outside `cmd/`, and no module outside it imports from it except the
+//! dispatchers (`main.rs`, `lib.rs`); `host-tools/tests/layering.rs` holds that rule.
 
 pub mod autopilot;
 pub mod calibrate;
-mod check;
 pub mod compare;
 pub mod demo;
 pub mod diagnose;
@@ -30,13 +19,7 @@ pub mod frames;
 pub mod image;
 pub mod inspect;
 mod inspect_image;
-pub mod json;
 pub mod keygen;
-pub mod output;
-pub mod printable;
-pub mod progress;
 pub mod report;
-pub mod run;
 pub mod simulate;
 mod simulate_units;
-pub mod stdout;

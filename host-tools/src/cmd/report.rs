@@ -4,8 +4,8 @@
 //! The plots are on the held-out run when there is one (`--verify`, or the `--from/--until`
 //! window of `--data`): that is where a base model fails and what the diagnosis is about; on the
 //! training run the base model already fits and the candidate plots are flat clouds.
-use super::json::{self, RunFigures, Subject};
-use super::run::RunArgs;
+use crate::args::run::RunArgs;
+use crate::output::json::{self, RunFigures, Subject};
 use crate::render::html::{ModelRun, ReportInput, View, render_with};
 use clap::Args as ClapArgs;
 use serde::Serialize;
@@ -60,13 +60,17 @@ struct Written {
 
 /// Refuses an `--out` that is one of the inputs, before anything is read.
 fn check_output(args: &Args) -> anyhow::Result<()> {
-    super::output::check_file_output("--out", &args.out)?;
+    crate::output::files::check_file_output("--out", &args.out)?;
     let mut inputs: Vec<(&str, &std::path::Path)> = vec![("--data", args.run.data.as_path())];
     inputs.extend(args.model.iter().map(|m| ("--model", m.as_path())));
     if let Some(v) = &args.verify {
         inputs.push(("--verify", v.as_path()));
     }
-    super::output::refuse_overwriting_inputs("--out", std::slice::from_ref(&args.out), &inputs)
+    crate::output::files::refuse_overwriting_inputs(
+        "--out",
+        std::slice::from_ref(&args.out),
+        &inputs,
+    )
 }
 
 /// The diagnosis of the first model, unless `--no-diagnosis`.

@@ -113,7 +113,7 @@ pub fn write(args: &Args) -> anyhow::Result<Option<(tcomp_sim::TruthFile, &std::
         }
         return Ok(None);
     }
-    let mut progress = super::progress::Bar::new(args.quiet);
+    let mut progress = crate::output::progress::Bar::new(args.quiet);
     let truth = tcomp_sim::write_preset_with_progress(&preset, out, args.gzip, &mut progress)?;
     progress.clear();
     Ok(Some((truth, out.as_path())))

@@ -9,7 +9,7 @@ use crate::calibrate::channel::ChannelResult;
 use crate::calibrate::spec::CalSpec;
 use crate::calibrate::summary::GATE_NOTE;
 use crate::calibrate::unit::UnitResult;
-use crate::cmd::json;
+use crate::output::json;
 use crate::render::num;
 use std::fmt::Write as _;
 

@@ -2,7 +2,7 @@
 //!
 //! Why: `println!` panics when the reader of a pipe has gone away (`EPIPE`), and with
 //! `RUST_BACKTRACE=1` the user gets a stack trace for having piped into `head`. Command output goes
-//! through [`write`] instead (the `outln!`/`out!` macros of the `cmd` module): the first write error
+//! through [`write`] instead (the `outln!`/`out!` macros of the `output` module): the first write error
 //! is kept and later output dropped, the command finishes its work (a `fit` still writes its blob),
 //! and `main` asks [`finish`] how standard output fared.
 
