@@ -7,6 +7,15 @@
 //! stores it as the core's blob; [`metrics`] measures it by running the decoded blob through the
 //! core's f32 `Channel`. [`train::fit`] ties it together for `tcomp fit`; [`spec`] reads the TOML spec.
 //!
+//! # Features
+//!
+//! - `cli` (off by default): the command-line derives — `clap::Args` on the option structs of
+//!   [`spec`], `clap::ValueEnum` on the load policies of [`dataset`] — and the bounds' clap value
+//!   parsers ([`options`]). Why behind a feature: this is a library of training that other programs
+//!   (the discovery, a user's own tool) link without a command-line parser; only the programs that
+//!   flatten these structs into their flags (`tcomp`) enable it. The structs, their TOML keys and
+//!   the bounds' checks are the same with or without it.
+//!
 //! ```no_run
 //! use tcomp_train::{Dataset, FitOptions, fit};
 //! let data = Dataset::load(std::path::Path::new("run.csv")).unwrap();

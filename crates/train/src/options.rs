@@ -5,7 +5,8 @@
 //! the spec key (`average`) — with the range and why. NaN, infinities, zero where it means nothing,
 //! negative and absurdly large values are refused instead of flowing into NaN figures, overflowing
 //! bin numbers or runs of days. The command line parses its flags through the same table
-//! ([`Bound::parser`]), so a flag and its spec key cannot disagree. Bounds that depend on the data (a bin against the sampling step and
+//! ([`Bound::parse`]; its clap value parser, `Bound::parser`, is behind the crate's `cli` feature),
+//! so a flag and its spec key cannot disagree. Bounds that depend on the data (a bin against the sampling step and
 //! the record's length) are checked by [`check_bin`] once the data are known.
 
 use crate::error::TrainError;
@@ -148,11 +149,13 @@ impl Bound {
     }
 
     /// A clap value parser for this bound.
+    #[cfg(feature = "cli")]
     pub fn parser(self) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
         move |s| self.parse(s)
     }
 
     /// A clap value parser for a count within this bound.
+    #[cfg(feature = "cli")]
     pub fn count_parser(
         self,
     ) -> impl Fn(&str) -> Result<usize, String> + Clone + Send + Sync + 'static {
@@ -209,6 +212,7 @@ impl OffOr {
     }
 
     /// A clap value parser.
+    #[cfg(feature = "cli")]
     pub fn parser(self) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
         move |s| self.parse(s)
     }
