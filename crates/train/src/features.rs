@@ -93,8 +93,8 @@ pub fn time_on_s(time: &[f64], power_on_s: Option<f64>) -> Result<f64, TrainErro
         None => Ok(0.0),
         Some(p) if p <= first => Ok(first - p),
         Some(p) => Err(TrainError::PowerOnAfterStart {
-            power_on: crate::options::num(p),
-            first: crate::options::num(first),
+            power_on: crate::num::exact(p),
+            first: crate::num::exact(first),
         }),
     }
 }

@@ -143,8 +143,8 @@ fn averaging(opts: &FitOptions, data: &Dataset, time: &[f64]) -> Result<f64, Tra
     match opts.average_s {
         Some(a) if a > 0.0 && a < step => Err(TrainError::AverageBelowStep {
             file: data.file().to_string(),
-            average: options::num(a),
-            step: options::num(step),
+            average: crate::num::exact(a),
+            step: crate::num::exact(step),
         }),
         Some(a) => Ok(a),
         // Bursty records (short bursts minutes apart) leave most default bins empty.
