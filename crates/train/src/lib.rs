@@ -1,7 +1,8 @@
 //! Host-side training of temperature-compensation models for inertial sensors.
 //!
 //! The pipeline: [`dataset`] loads a measurement CSV with precise errors; [`features`] runs the
-//! core's feature program over it (the code the firmware runs); a method fits an RBF in f64 —
+//! core's feature program over it (the code the firmware runs) and [`binning`] averages the rows
+//! into time bins; a method fits an RBF in f64 —
 //! [`bayes`] (default, MacKay evidence), [`mse`] (centers by k-means or [`ols`]), [`gradient`] or
 //! the [`poly3`] baseline, each an implementation of [`method::FitMethod`]; [`blob_io`]
 //! stores it as the core's blob; [`metrics`] measures it by running the decoded blob through the
@@ -28,6 +29,7 @@
 
 pub mod autopilot;
 pub mod bayes;
+pub mod binning;
 pub mod blob_io;
 pub mod budget;
 pub mod cubic;
