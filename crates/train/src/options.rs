@@ -6,8 +6,8 @@
 //! negative and absurdly large values are refused instead of flowing into NaN figures, overflowing
 //! bin numbers or runs of days. The command line parses its flags through the same table
 //! ([`Bound::parse`]; its clap value parser, `Bound::parser`, is behind the crate's `cli` feature),
-//! so a flag and its spec key cannot disagree. Bounds that depend on the data (a bin against the sampling step and
-//! the record's length) are checked by [`check_bin`] once the data are known.
+//! so a flag and its spec key cannot disagree. Bounds that depend on the data (a bin against the
+//! sampling step and the record's length) are checked by [`check_bin`] once the data are known.
 
 use crate::error::TrainError;
 use crate::num::exact;
@@ -140,13 +140,13 @@ impl Bound {
         }
     }
 
-    /// A clap value parser for this bound.
+    /// A clap value parser for this bound (feature `cli`).
     #[cfg(feature = "cli")]
     pub fn parser(self) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
         move |s| self.parse(s)
     }
 
-    /// A clap value parser for a count within this bound.
+    /// A clap value parser for a count within this bound (feature `cli`).
     #[cfg(feature = "cli")]
     pub fn count_parser(
         self,
@@ -203,7 +203,7 @@ impl OffOr {
         }
     }
 
-    /// A clap value parser.
+    /// A clap value parser (feature `cli`).
     #[cfg(feature = "cli")]
     pub fn parser(self) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
         move |s| self.parse(s)
