@@ -11,9 +11,10 @@ use crate::score::ScoreOptions;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use tcomp_train::bayes::{self, BayesOptions};
+use tcomp_train::binning::{bin_mean, bins};
 use tcomp_train::dataset::segments;
 use tcomp_train::evidence::{self, GroupFit};
-use tcomp_train::features::{FeatureSpec, bin_mean, bins};
+use tcomp_train::features::FeatureSpec;
 use tcomp_train::{Dataset, Roles};
 
 /// Held-out data.
@@ -170,10 +171,10 @@ fn adapted_bins(
     roles: &Roles,
 ) -> Result<ScoreOptions> {
     let mut adapted = opts.clone();
-    adapted.bin_s = tcomp_train::features::adaptive_bin(time, opts.bin_s, 24);
+    adapted.bin_s = tcomp_train::binning::adaptive_bin(time, opts.bin_s, 24);
     if let Some(v) = verify {
         adapted.heldout_bin_s =
-            tcomp_train::features::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
+            tcomp_train::binning::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
     }
     Ok(adapted)
 }

@@ -248,8 +248,8 @@ fn heldout_std(r: &Refits<'_>, splits: &[Split], features: &[String]) -> Result<
         sum += b.residual_std.powi(2) * b.bins as f64;
         count += b.bins;
         each.push(b.residual_std);
-        let bins = tcomp_train::features::bins(&run.time, sp.bin_s);
-        binned.push(tcomp_train::features::bin_mean(&run.residual, &bins));
+        let bins = tcomp_train::binning::bins(&run.time, sp.bin_s);
+        binned.push(tcomp_train::binning::bin_mean(&run.residual, &bins));
     }
     let pooled = if count > 0 {
         (sum / count as f64).sqrt()

@@ -6,7 +6,8 @@
 
 use crate::error::Result;
 use nalgebra::DMatrix;
-use tcomp_train::features::{self, FeatureSpec, bin_mean};
+use tcomp_train::binning::bin_mean;
+use tcomp_train::features::{self, FeatureSpec};
 use tcomp_train::rbf64::Rbf64;
 use tcomp_train::{Dataset, Roles};
 

@@ -192,9 +192,9 @@ pub fn diagnose(
     if opts.score.bin_s < step {
         return Err(DiscoverError::Invalid(format!(
             "--bin {}: shorter than the sampling step of {} ({} s), so a bin would hold no sample",
-            tcomp_train::options::num(opts.score.bin_s),
+            tcomp_train::num::exact(opts.score.bin_s),
             data.file(),
-            tcomp_train::options::num(step)
+            tcomp_train::num::exact(step)
         )));
     }
     let run = metrics::run_model(model, data, &roles, temp, opts.score.gap_s)?;

@@ -8,7 +8,7 @@
 //! cut a run the same way); warm-up and bands are added here.
 
 use serde::Serialize;
-use tcomp_train::features::{bin_mean, bins};
+use tcomp_train::binning::{bin_mean, bins};
 use tcomp_train::metrics::{self, Run};
 
 /// Length of the warm-up segment at the start of a run (s).

@@ -980,7 +980,7 @@ pub fn held_out(
             what: format!(
                 "no IMU record from {} s on: nothing held out to compare on (the log's IMU \
                  records end earlier)",
-                crate::options::num(from_s)
+                crate::num::exact(from_s)
             ),
         }
         .into());

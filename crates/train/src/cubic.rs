@@ -6,9 +6,10 @@
 //! features (by the core's program, so what is fitted is what flies), while `bayes` only sees its
 //! rows; and it is the same cubic poly3 flies ([`crate::poly3::program_lines`]).
 
+use crate::binning::bin_mean;
 use crate::dataset::Dataset;
 use crate::error::TrainError;
-use crate::features::{self, FeatureSpec, bin_mean};
+use crate::features::{self, FeatureSpec};
 use crate::poly3::program_lines;
 use tcomp_core::FeatureRange;
 

@@ -407,10 +407,10 @@ impl Dataset {
         let window = || {
             let mut w = Vec::new();
             if lo > f64::NEG_INFINITY || lo.is_nan() {
-                w.push(format!("--from {}", crate::options::num(lo)));
+                w.push(format!("--from {}", crate::num::exact(lo)));
             }
             if hi < f64::INFINITY || hi.is_nan() {
-                w.push(format!("--until {}", crate::options::num(hi)));
+                w.push(format!("--until {}", crate::num::exact(hi)));
             }
             w.join(" and ")
         };

@@ -7,7 +7,8 @@
 //! across missed periods: `lag` and `rate` exactly for an input that moved linearly over the gap,
 //! or restarted when the gap is longer than the filters remember ([`gap_resets`]; the caller warns).
 //! `warmup`'s clock starts at the first row's time on ([`time_on_s`]). Averaging into
-//! non-overlapping bins (the `--average` option) happens afterwards, on these features.
+//! non-overlapping bins (the `--average` option) happens afterwards, on these features
+//! ([`crate::binning`]).
 
 use crate::dataset::Dataset;
 use crate::error::TrainError;
@@ -21,6 +22,10 @@ pub const F: usize = HOST_FEATURES;
 pub const N: usize = HOST_NODES;
 
 pub use tcomp_core::{FLIGHT_FEATURES, FLIGHT_NODES};
+
+/// The time bins lived here before they had a module of their own ([`crate::binning`]); the old
+/// paths keep working.
+pub use crate::binning::{adaptive_bin, bin_mean, bins};
 
 /// Whether `spec` compiles into the firmware's program capacity. The trainer only adds features of
 /// its own (the cubic basis of `bayes`) when it does; what the user asks for is theirs to size.
@@ -93,8 +98,8 @@ pub fn time_on_s(time: &[f64], power_on_s: Option<f64>) -> Result<f64, TrainErro
         None => Ok(0.0),
         Some(p) if p <= first => Ok(first - p),
         Some(p) => Err(TrainError::PowerOnAfterStart {
-            power_on: crate::options::num(p),
-            first: crate::options::num(first),
+            power_on: crate::num::exact(p),
+            first: crate::num::exact(first),
         }),
     }
 }
@@ -208,59 +213,4 @@ pub fn describe_step_error<const N2: usize, const F2: usize>(
         StepError::MissingInput { index } => format!("input {} is missing", usize::from(index) + 1),
         other => other.to_string(),
     }
-}
-
-/// Non-overlapping bins of `bin_s` seconds starting at the first sample: for each bin that holds at
-/// least half the samples a full bin would, its row range `[start, end)`. With `bin_s <= 0` every
-/// row is its own bin.
-pub fn bins(time: &[f64], bin_s: f64) -> Vec<(usize, usize)> {
-    let Some(&t0) = time.first() else {
-        return Vec::new();
-    };
-    if bin_s <= 0.0 {
-        return (0..time.len()).map(|i| (i, i + 1)).collect();
-    }
-    let step = crate::dataset::median_step(time);
-    let need = ((bin_s / step) * 0.5).floor().max(1.0) as usize;
-    let mut out = Vec::new();
-    let mut start = 0;
-    let mut cur = 0i64;
-    for (i, &t) in time.iter().enumerate() {
-        // t ≥ t0 (time is checked monotonic), so truncation is the floor, without a libm call.
-        let q = (t - t0) / bin_s;
-        let b = if q >= 0.0 { q as i64 } else { q.floor() as i64 };
-        if b != cur {
-            if i - start >= need {
-                out.push((start, i));
-            }
-            start = i;
-            cur = b;
-        }
-    }
-    if time.len() - start >= need {
-        out.push((start, time.len()));
-    }
-    out
-}
-
-/// The bin length to use for `wanted_s` on this time axis: `wanted_s` halved until [`bins`] gives
-/// at least `min_bins` bins that hold data, but not below two sample steps. Continuous records keep
-/// `wanted_s`; bursty ones (a few seconds of data every few minutes) get bins that fit their bursts.
-pub fn adaptive_bin(time: &[f64], wanted_s: f64, min_bins: usize) -> f64 {
-    let floor = 2.0 * crate::dataset::median_step(time);
-    let mut bin_s = wanted_s;
-    while bins(time, bin_s).len() < min_bins && bin_s / 2.0 >= floor {
-        bin_s /= 2.0;
-    }
-    bin_s
-}
-
-/// Mean of `v` over each bin.
-pub fn bin_mean(v: &[f64], bins: &[(usize, usize)]) -> Vec<f64> {
-    bins.iter()
-        .map(|&(a, b)| {
-            let s = v.get(a..b).unwrap_or(&[]);
-            s.iter().sum::<f64>() / s.len().max(1) as f64
-        })
-        .collect()
 }

@@ -173,8 +173,8 @@ impl FitOptions {
             && f >= u
         {
             return Err(TrainError::EmptyWindow {
-                from: options::num(f),
-                until: options::num(u),
+                from: crate::num::exact(f),
+                until: crate::num::exact(u),
             });
         }
         Ok(())

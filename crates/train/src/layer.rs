@@ -1,10 +1,12 @@
 //! Option layers: structs whose every field may be unset, laid one over another field by field.
 //!
 //! Why: the fit options come from two places, the TOML spec file and the command-line flags, and
-//! flags override the file. Each concern's options are one struct deriving both `clap::Args` and
-//! `serde::Deserialize` (see [`crate::spec`]), with every field an `Option` (or a list, which
-//! adds up); [`layer!`](crate::layer!) writes the struct and its [`Layer`] implementation from the
-//! one field list, so the merge and the set of known spec keys never need a second list of names.
+//! flags override the file. Each concern's options are one struct deriving both `clap::Args` (with
+//! the crate's `cli` feature: a library of training linked without a command-line parser does
+//! not carry clap) and `serde::Deserialize` (see [`crate::spec`]), with every field an `Option` (or
+//! a list, which adds up); [`layer!`](crate::layer!) writes the struct and its [`Layer`]
+//! implementation from the one field list (attributes, `cfg_attr` ones included, pass through), so
+//! the merge and the set of known spec keys never need a second list of names.
 //! (The alternative, clap's defaults resolved after reading the TOML, would need clap to tell a
 //! default from a value given; with unset fields the defaults live in one place,
 //! [`crate::FitOptions::new`].)

@@ -1,11 +1,21 @@
 //! Host-side training of temperature-compensation models for inertial sensors.
 //!
 //! The pipeline: [`dataset`] loads a measurement CSV with precise errors; [`features`] runs the
-//! core's feature program over it (the code the firmware runs); a method fits an RBF in f64 —
+//! core's feature program over it (the code the firmware runs) and [`binning`] averages the rows
+//! into time bins; a method fits an RBF in f64 —
 //! [`bayes`] (default, MacKay evidence), [`mse`] (centers by k-means or [`ols`]), [`gradient`] or
 //! the [`poly3`] baseline, each an implementation of [`method::FitMethod`]; [`blob_io`]
 //! stores it as the core's blob; [`metrics`] measures it by running the decoded blob through the
 //! core's f32 `Channel`. [`train::fit`] ties it together for `tcomp fit`; [`spec`] reads the TOML spec.
+//!
+//! # Features
+//!
+//! - `cli` (off by default): the command-line derives — `clap::Args` on the option structs of
+//!   [`spec`], `clap::ValueEnum` on the load policies of [`dataset`] — and the bounds' clap value
+//!   parsers ([`options`]). Why behind a feature: this is a library of training that other programs
+//!   (the discovery, a user's own tool) link without a command-line parser; only the programs that
+//!   flatten these structs into their flags (`tcomp`) enable it. The structs, their TOML keys and
+//!   the bounds' checks are the same with or without it.
 //!
 //! ```no_run
 //! use tcomp_train::{Dataset, FitOptions, fit};
@@ -19,6 +29,7 @@
 
 pub mod autopilot;
 pub mod bayes;
+pub mod binning;
 pub mod blob_io;
 pub mod budget;
 pub mod cubic;

@@ -8,7 +8,8 @@
 //! It lives in the trainer's library so the libraries' own sentences (discovery's verdicts) and the
 //! command line's tables format alike; the CLI re-exports it as `render::num`.
 //! Every figure a person reads goes through [`num`] (or [`plain`] where the unit is a column
-//! header), every change through [`change_pct`] and [`pct`].
+//! header), every change through [`change_pct`] and [`pct`]; a value the user gave (an option's
+//! value named in an error, a bound of its range) through [`exact`], which does not round.
 
 /// Significant digits of a figure.
 pub const SIG: usize = 4;
@@ -44,6 +45,19 @@ pub fn plain(v: f64, sig: usize) -> String {
 /// `v` with [`SIG`] significant digits and its unit (`0.09144 deg/h`); no unit, no space.
 pub fn num(v: f64, unit: &str) -> String {
     with_unit(plain(v, SIG), unit)
+}
+
+/// `v` exactly, as a user would write it back in a flag or a spec key: every digit Rust needs to
+/// read it back (`0.1`, `1234.5678`), in scientific notation outside [10⁻⁴, 10⁹) (`1e-300` rather
+/// than three hundred zeros); `NaN` and `inf` as Rust writes them. Unlike [`num`], which rounds a
+/// figure to [`SIG`] digits for reading, this names a value given (an option's value in an error,
+/// a bound), which must not be rounded.
+pub fn exact(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// `text` followed by `unit` (a space between; nothing when the unit is empty).
@@ -156,6 +170,17 @@ mod tests {
         assert!(!plain(1.234e-9, SIG).contains('e'));
         assert_eq!(num(0.0297, "deg/h"), "0.0297 deg/h");
         assert_eq!(num(3.0, ""), "3");
+    }
+
+    #[test]
+    fn exact_keeps_every_digit_and_writes_extremes_in_scientific_notation() {
+        assert_eq!(exact(0.1), "0.1");
+        assert_eq!(exact(1234.5678), "1234.5678");
+        assert_eq!(exact(1e7), "10000000");
+        assert_eq!(exact(1e-300), "1e-300");
+        assert_eq!(exact(-2.5e10), "-2.5e10");
+        assert_eq!(exact(0.0), "0");
+        assert_eq!(exact(f64::NAN), "NaN");
     }
 
     #[test]

@@ -5,19 +5,12 @@
 //! the spec key (`average`) — with the range and why. NaN, infinities, zero where it means nothing,
 //! negative and absurdly large values are refused instead of flowing into NaN figures, overflowing
 //! bin numbers or runs of days. The command line parses its flags through the same table
-//! ([`Bound::parser`]), so a flag and its spec key cannot disagree. Bounds that depend on the data (a bin against the sampling step and
-//! the record's length) are checked by [`check_bin`] once the data are known.
+//! ([`Bound::parse`]; its clap value parser, `Bound::parser`, is behind the crate's `cli` feature),
+//! so a flag and its spec key cannot disagree. Bounds that depend on the data (a bin against the
+//! sampling step and the record's length) are checked by [`check_bin`] once the data are known.
 
 use crate::error::TrainError;
-
-/// A number as a user would write it: `1e-300` rather than three hundred zeros.
-pub fn num(v: f64) -> String {
-    if v != 0.0 && v.is_finite() && !(1e-4..1e9).contains(&v.abs()) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    }
-}
+use crate::num::exact;
 
 /// The valid range of one numeric option.
 #[derive(Clone, Copy, Debug)]
@@ -98,7 +91,7 @@ impl Bound {
         if self.contains(v) {
             return Ok(v);
         }
-        Err(self.refuse(num(v), self.range(), ""))
+        Err(self.refuse(exact(v), self.range(), ""))
     }
 
     /// [`Bound::check`] for a count; `context` follows the range in the message (e.g.
@@ -147,12 +140,14 @@ impl Bound {
         }
     }
 
-    /// A clap value parser for this bound.
+    /// A clap value parser for this bound (feature `cli`).
+    #[cfg(feature = "cli")]
     pub fn parser(self) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
         move |s| self.parse(s)
     }
 
-    /// A clap value parser for a count within this bound.
+    /// A clap value parser for a count within this bound (feature `cli`).
+    #[cfg(feature = "cli")]
     pub fn count_parser(
         self,
     ) -> impl Fn(&str) -> Result<usize, String> + Clone + Send + Sync + 'static {
@@ -165,7 +160,7 @@ fn bound_num(v: f64) -> String {
     if v != 0.0 && v.is_finite() && v.abs() >= 1e6 {
         format!("{v:e}")
     } else {
-        num(v)
+        exact(v)
     }
 }
 
@@ -188,7 +183,7 @@ impl OffOr {
         if v == 0.0 || self.0.contains(v) {
             return Ok(v);
         }
-        Err(self.0.refuse(num(v), self.range(), ""))
+        Err(self.0.refuse(exact(v), self.range(), ""))
     }
 
     /// Parses and checks a command-line value.
@@ -208,7 +203,8 @@ impl OffOr {
         }
     }
 
-    /// A clap value parser.
+    /// A clap value parser (feature `cli`).
+    #[cfg(feature = "cli")]
     pub fn parser(self) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
         move |s| self.parse(s)
     }
@@ -405,9 +401,9 @@ pub fn check_bin(flag: &str, bin_s: f64, time: &[f64]) -> Result<f64, TrainError
         return Ok(bin_s);
     }
     Err(TrainError::BinVsData {
-        option: format!("{flag} {}", num(bin_s)),
-        step: num(step),
-        max: num(max),
-        span: num(span),
+        option: format!("{flag} {}", exact(bin_s)),
+        step: exact(step),
+        max: exact(max),
+        span: exact(span),
     })
 }

@@ -6,9 +6,10 @@
 //! every row, refuse constant or collinear features, record the ranges and average into bins —
 //! and benchmarks reach it alone through [`training_rows`].
 
+use crate::binning::{adaptive_bin, bin_mean, bins};
 use crate::dataset::{DataError, Dataset, segments};
 use crate::error::TrainError;
-use crate::features::{self, FeatureSpec, bin_mean, bins};
+use crate::features::{self, FeatureSpec};
 use crate::method::{FitMethod, TrainingSet};
 use crate::metrics::Roles;
 use crate::options;
@@ -143,12 +144,12 @@ fn averaging(opts: &FitOptions, data: &Dataset, time: &[f64]) -> Result<f64, Tra
     match opts.average_s {
         Some(a) if a > 0.0 && a < step => Err(TrainError::AverageBelowStep {
             file: data.file().to_string(),
-            average: options::num(a),
-            step: options::num(step),
+            average: crate::num::exact(a),
+            step: crate::num::exact(step),
         }),
         Some(a) => Ok(a),
         // Bursty records (short bursts minutes apart) leave most default bins empty.
-        None => Ok(crate::features::adaptive_bin(
+        None => Ok(adaptive_bin(
             time,
             DEFAULT_AVERAGE_S.min(span / MIN_DEFAULT_BINS),
             MIN_DEFAULT_BINS as usize,

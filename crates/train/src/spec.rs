@@ -1,6 +1,11 @@
-//! The fit options, one struct per concern, each both the command-line flags (`clap::Args`) and
-//! the keys of the TOML fit spec (`serde::Deserialize`) — so adding an effect is one more line of
-//! the file, and adding an option is one field here.
+//! The fit options, one struct per concern, each both the command-line flags (`clap::Args`, with
+//! the crate's `cli` feature) and the keys of the TOML fit spec (`serde::Deserialize`) — so adding
+//! an effect is one more line of the file, and adding an option is one field here.
+//!
+//! The clap derive and its `arg` attributes are behind the `cli` feature (off by default): the
+//! trainer is a library that programs without a command line link (the discovery, a user's own
+//! tool), and they should not carry clap for it; `tcomp` enables it and flattens these structs
+//! into its commands. Without it the structs, their keys and the checks are the same.
 //!
 //! ```toml
 //! time = "time_s"
@@ -13,14 +18,15 @@
 //! ```
 //! Unknown keys are errors (a typo must not be silently ignored). Command-line flags override
 //! single values and add to the `feature`/`signal` lists ([`crate::layer`]); numbers are checked
-//! against the one table of bounds ([`crate::options`]) by clap's value parsers and again, for
-//! spec files and library callers, by [`crate::FitOptions::from_spec`].
+//! against the one table of bounds ([`crate::options`]) by clap's value parsers (with `cli`) and
+//! again, for spec files and library callers, by [`crate::FitOptions::from_spec`].
 //!
 //! The spec is read flat (every key at the top level); each concern's struct takes its keys from
 //! the same text, so a type error is still reported at its line and column.
 
 use crate::error::TrainError;
 use crate::layer::Layer;
+#[cfg(feature = "cli")]
 use crate::options::{
     AVERAGE, CENTERS_BAYES, FROM, GAP, ITERATIONS, POWER_ON, REFERENCE_VALUE, UNTIL, parse_seed,
 };
@@ -43,78 +49,96 @@ impl RunOptions {
 crate::layer! {
     /// Which rows of a run are read and against what reference: shared by every command that
     /// reads a run (`fit`, `eval`, `diagnose`, `compare`, `report`), and keys of the fit spec.
-    #[derive(Clone, Debug, Default, PartialEq, clap::Args, Deserialize)]
+    #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+    #[cfg_attr(feature = "cli", derive(clap::Args))]
     #[serde(rename_all = "kebab-case")]
     pub struct RunOptions {
         /// Reference column: error = target − reference (when evaluating: instead of the model's).
-        #[arg(long)]
+        #[cfg_attr(feature = "cli", arg(long))]
         pub reference: Option<String>,
         /// Constant reference in the target's unit (when fitting with no reference at all, the
         /// training mean of the target is used).
-        #[arg(long, allow_negative_numbers = true, value_parser = REFERENCE_VALUE.parser())]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = REFERENCE_VALUE.parser())
+        )]
         pub reference_value: Option<f64>,
         /// Use only rows with time ≥ this (s).
-        #[arg(long, allow_negative_numbers = true, value_parser = FROM.parser())]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = FROM.parser())
+        )]
         pub from: Option<f64>,
         /// Use only rows with time < this (s).
-        #[arg(long, allow_negative_numbers = true, value_parser = UNTIL.parser())]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = UNTIL.parser())
+        )]
         pub until: Option<f64>,
         /// Steps longer than this (s) are gaps: rate and lag are carried across as for an input
         /// moving linearly, or restarted (with a warning) when the gap is longer than 5× the
         /// program's longest time constant [default: 10× the median step].
-        #[arg(long, allow_negative_numbers = true, value_parser = GAP.parser())]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = GAP.parser())
+        )]
         pub gap: Option<f64>,
         /// Time (s, on the time column) the instrument was switched on: `warmup(τ)` counts from
         /// here [default: the first row read].
-        #[arg(long, allow_negative_numbers = true, value_parser = POWER_ON.parser())]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = POWER_ON.parser())
+        )]
         pub power_on: Option<f64>,
         /// Rows whose time repeats the previous row's: `average` them into one [default],
         /// `drop` all but the first, or `refuse` the file. With average or drop, time stepping
         /// back by more than 10 median steps is a clock restart: the rows from there continue
         /// after a gap.
-        #[arg(long, value_enum)]
+        #[cfg_attr(feature = "cli", arg(long, value_enum))]
         pub repeated_time: Option<crate::dataset::RepeatedTime>,
         /// Empty or NaN cells in a column the model uses: `dropout` drops the row, a logger
         /// dropout the feature state is carried across [default]; `refuse` the file.
-        #[arg(long, value_enum)]
+        #[cfg_attr(feature = "cli", arg(long, value_enum))]
         pub missing: Option<crate::dataset::Missing>,
     }
 }
 
 crate::layer! {
     /// The channel a model compensates: its columns and what the blob says about it.
-    #[derive(Clone, Debug, Default, PartialEq, clap::Args, Deserialize)]
+    #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+    #[cfg_attr(feature = "cli", derive(clap::Args))]
     #[serde(rename_all = "kebab-case")]
     pub struct ChannelOptions {
         /// Time column, seconds [default: time_s].
-        #[arg(long)]
+        #[cfg_attr(feature = "cli", arg(long))]
         pub time: Option<String>,
         /// Sensor output column.
-        #[arg(long)]
+        #[cfg_attr(feature = "cli", arg(long))]
         pub target: Option<String>,
         /// Sensor kind: rlg, qma, ifog, mems-gyro, mems-accel, other.
-        #[arg(long)]
+        #[cfg_attr(feature = "cli", arg(long))]
         pub sensor: Option<String>,
         /// Axis label.
-        #[arg(long)]
+        #[cfg_attr(feature = "cli", arg(long))]
         pub axis: Option<String>,
         /// Unit of the target.
-        #[arg(long)]
+        #[cfg_attr(feature = "cli", arg(long))]
         pub unit: Option<String>,
     }
 }
 
 crate::layer! {
     /// The feature program: named signals and the feature expressions (lists that add up).
-    #[derive(Clone, Debug, Default, PartialEq, clap::Args, Deserialize)]
+    #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+    #[cfg_attr(feature = "cli", derive(clap::Args))]
     #[serde(rename_all = "kebab-case")]
     pub struct FeatureOptions {
         /// Feature expression, e.g. `rate(T)` (repeatable).
-        #[arg(long)]
+        #[cfg_attr(feature = "cli", arg(long))]
         #[serde(default)]
         pub feature: Vec<String>,
         /// Named signal `NAME=EXPR` (repeatable).
-        #[arg(long)]
+        #[cfg_attr(feature = "cli", arg(long))]
         #[serde(default)]
         pub signal: Vec<String>,
     }
@@ -122,35 +146,54 @@ crate::layer! {
 
 crate::layer! {
     /// How the model is fitted: the method and its settings.
-    #[derive(Clone, Debug, Default, PartialEq, clap::Args, Deserialize)]
+    #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+    #[cfg_attr(feature = "cli", derive(clap::Args))]
     #[serde(rename_all = "kebab-case")]
     pub struct MethodOptions {
         /// The method (see the list below).
-        #[arg(long, help = crate::method::Method::help())]
+        #[cfg_attr(feature = "cli", arg(long, help = crate::method::Method::help()))]
         pub method: Option<String>,
         /// Average into non-overlapping bins of this many seconds before fitting; 0 = off
         /// [default: 120, shortened on short runs to leave 60 bins].
-        #[arg(long, allow_negative_numbers = true, value_parser = AVERAGE.parser())]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = AVERAGE.parser())
+        )]
         pub average: Option<f64>,
         /// Number of centers (bayes: fixed instead of chosen by evidence; mse/gradient: default 16).
-        #[arg(long, allow_negative_numbers = true, value_parser = CENTERS_BAYES.count_parser())]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = CENTERS_BAYES.count_parser())
+        )]
         pub centers: Option<usize>,
         /// No linear term (bayes); spec key `linear = false`.
-        #[arg(long = "no-linear", num_args = 0, default_missing_value = "false")]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long = "no-linear", num_args = 0, default_missing_value = "false")
+        )]
         pub linear: Option<bool>,
         /// Do not offer bayes the cubic in the first feature as a basis (it is chosen only when
         /// the Gaussians do not beat it by ln 20 in log evidence); spec key `cubic = false`.
-        #[arg(long = "no-cubic", num_args = 0, default_missing_value = "false")]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long = "no-cubic", num_args = 0, default_missing_value = "false")
+        )]
         pub cubic: Option<bool>,
         /// Center selection of mse: kmeans (default) or ols (orthogonal least squares forward
         /// selection).
-        #[arg(long)]
+        #[cfg_attr(feature = "cli", arg(long))]
         pub select: Option<String>,
         /// k-means seed.
-        #[arg(long, allow_negative_numbers = true, value_parser = parse_seed)]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = parse_seed)
+        )]
         pub seed: Option<u64>,
         /// Gradient-descent iterations.
-        #[arg(long, allow_negative_numbers = true, value_parser = ITERATIONS.count_parser())]
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = ITERATIONS.count_parser())
+        )]
         pub iterations: Option<usize>,
     }
 }

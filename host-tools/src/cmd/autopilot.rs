@@ -106,7 +106,7 @@ pub fn side_by_side(path: &std::path::Path, from: f64) -> anyhow::Result<Vec<Row
 
 /// The side-by-side as a table.
 fn print_rows(rows: &[Row], from: f64) {
-    let n = tcomp_train::options::num;
+    let n = tcomp_train::num::exact;
     outln!(
         "held out: the records from {} s on; standard deviation of what is left (the log's units)",
         n(from)

@@ -64,7 +64,7 @@ pub(super) fn training_blocks(
         let (lo, hi) = (w[0], w[1]);
         let block = data.select_time(&roles.time, lo, hi)?;
         let bin_s =
-            tcomp_train::features::adaptive_bin(block.time(&roles.time)?, opts.heldout_bin_s, 10);
+            tcomp_train::binning::adaptive_bin(block.time(&roles.time)?, opts.heldout_bin_s, 10);
         out.push(Split {
             train: without(data, t, lo, hi),
             test: data.clone(),
@@ -119,7 +119,7 @@ pub(super) fn verification_split(
     let Some(v) = verify else {
         return Ok(None);
     };
-    let bin_s = tcomp_train::features::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
+    let bin_s = tcomp_train::binning::adaptive_bin(v.time(&roles.time)?, opts.heldout_bin_s, 10);
     let split = Split {
         train: data.clone(),
         test: v.clone(),

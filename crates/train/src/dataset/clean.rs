@@ -24,7 +24,8 @@ use super::{BadKind, DataError, Dataset};
 use serde::{Deserialize, Serialize};
 
 /// What to do with rows whose time repeats or goes back (`--repeated-time`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum RepeatedTime {
     /// Average rows of one time into one row; a clock restart starts a new segment after a gap.
@@ -37,7 +38,8 @@ pub enum RepeatedTime {
 }
 
 /// What to do with an empty or NaN cell in a used column (`--missing`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Missing {
     /// Drop the row, as a logger dropout the feature state is carried across.

@@ -10,7 +10,7 @@
 //!
 //! A bin closes when the time passes its end; whether it holds enough samples to count (half a
 //! full bin, from the median time step) is decided at [`Accumulator::finish`], when the median is
-//! known, exactly as [`crate::features::bins`] decides it over a whole column.
+//! known, exactly as [`crate::binning::bins`] decides it over a whole column.
 
 use super::{Binned, EvalReport, HOLD_RATE_PER_MIN, SegmentStats, improvement, std};
 
@@ -95,7 +95,7 @@ struct Bin {
 }
 
 /// Non-overlapping bins of `width` seconds from the first sample (every row its own bin when
-/// `width <= 0`), as [`crate::features::bins`] cuts them; all bins are kept, full or not.
+/// `width <= 0`), as [`crate::binning::bins`] cuts them; all bins are kept, full or not.
 #[derive(Clone, Debug)]
 struct Binner {
     width: f64,

@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
 use super::*;
-use crate::features::{bin_mean, bins};
+use crate::binning::{bin_mean, bins};
 
 fn msd(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64

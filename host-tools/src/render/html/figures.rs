@@ -14,7 +14,8 @@ use super::plot::{COLORS, Plot, range};
 use super::{ModelRun, View};
 use tcomp_discover::segments::SegmentRow;
 use tcomp_discover::{Analysis, score};
-use tcomp_train::features::{FeatureSpec, adaptive_bin, bin_mean, bins};
+use tcomp_train::binning::{adaptive_bin, bin_mean, bins};
+use tcomp_train::features::FeatureSpec;
 use tcomp_train::metrics::{self, Run};
 
 /// Bins a plot aims for over a run.
