@@ -2,7 +2,9 @@
 //!
 //! Wire format (postcard is not self-describing, so the layout is fixed by this type and its version):
 //! ```text
-//! postcard(Model { magic: b"TCMB", version: u16, meta, program, ranges, rbf, residual }) ++ CRC-32 (LE)
+//! postcard(Model { magic: b"TCMB", version: u16, meta, program, ranges, rbf, residual })
+//!   ++ postcard(rbf.masks: Vec<u8>)   (format 3 and later only)
+//!   ++ CRC-32 (LE)
 //! ```
 //! The magic is four raw bytes and the version a varint, so both are read before the structure and a
 //! blob of another version is refused by number, not misread. The CRC-32 (ISO-HDLC, as zip/PNG) covers
@@ -31,10 +33,14 @@ pub const MAGIC: [u8; 4] = *b"TCMB";
 /// does not read ([`BlobError::UnsupportedVersion`]), never as a malformed one.
 ///
 /// Version 2 added `warmup(tau_s)` (time since power-on); a model without it is still version 1,
-/// bit for bit.
-pub const FORMAT_VERSION: u16 = 2;
-/// The oldest blob format version this build reads: the layout of [`Model`] has not changed since.
+/// bit for bit. Version 3 added the per-center feature masks of additive models ([`Rbf::masks`]),
+/// written after the residual level; a model without masks keeps its older version and bytes.
+pub const FORMAT_VERSION: u16 = 3;
+/// The oldest blob format version this build reads: the layout of [`Model`] has not changed since
+/// (format 3 appends a field; a blob of an older version has no masks).
 pub const OLDEST_FORMAT_VERSION: u16 = 1;
+/// The first format whose blobs carry [`Rbf::masks`] after the residual level.
+pub const MASKS_SINCE: u16 = 3;
 
 const _: () = assert!(
     crate::lang::NEWEST_SINCE <= FORMAT_VERSION && OLDEST_FORMAT_VERSION <= FORMAT_VERSION,
@@ -279,13 +285,23 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
     ) -> Self {
         Self {
             magic: MAGIC,
-            version: program.format_version().max(OLDEST_FORMAT_VERSION),
+            version: Self::version_for(&program, &rbf),
             meta,
             program,
             ranges,
             rbf,
             residual,
         }
+    }
+
+    /// The oldest format that can carry `program` and `rbf`: its newest operation's, and
+    /// [`MASKS_SINCE`] for an additive model.
+    pub fn version_for(program: &Program<'a, N, F>, rbf: &Rbf<C, F>) -> u16 {
+        let masks = if rbf.masks.is_empty() { 0 } else { MASKS_SINCE };
+        program
+            .format_version()
+            .max(OLDEST_FORMAT_VERSION)
+            .max(masks)
     }
 
     /// Number of features.
@@ -308,6 +324,11 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
             ));
         }
         self.rbf.validate()?;
+        if !self.rbf.masks.is_empty() && self.version < MASKS_SINCE {
+            return Err(BlobError::Inconsistent(
+                "version: older than the additive model's masks (format 3)",
+            ));
+        }
         let nf = self.program.n_features();
         if self.rbf.n_features as usize != nf {
             return Err(BlobError::Inconsistent(
@@ -350,7 +371,13 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
     /// Writes the blob into `buf`, returning its length. Refuses a model that would not decode.
     pub fn encode(&self, buf: &mut [u8]) -> Result<usize, BlobError> {
         self.validate()?;
-        let used = postcard::to_slice(self, buf).map_err(map_postcard)?.len();
+        let mut used = postcard::to_slice(self, buf).map_err(map_postcard)?.len();
+        if self.version >= MASKS_SINCE {
+            let rest = buf.get_mut(used..).ok_or(BlobError::BufferTooSmall)?;
+            used += postcard::to_slice(&self.rbf.masks, rest)
+                .map_err(map_postcard)?
+                .len();
+        }
         let crc = crc32(buf.get(..used).ok_or(BlobError::BufferTooSmall)?);
         let tail = buf
             .get_mut(used..used + 4)
@@ -365,11 +392,9 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
     /// intact blob of another format is reported as [`BlobError::UnsupportedVersion`].
     pub fn decode(bytes: &'a [u8]) -> Result<Self, BlobError> {
         let body = Self::envelope(bytes)?;
-        let (model, rest) =
+        let (mut model, rest) =
             postcard::take_from_bytes::<Self>(body).map_err(|e| map_body_error(body, e))?;
-        if !rest.is_empty() {
-            return Err(BlobError::Malformed);
-        }
+        model.rbf.masks = Self::trailing_masks(model.version, rest)?;
         model.validate()?;
         Ok(model)
     }
@@ -384,15 +409,30 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
             let mut de = postcard::Deserializer::from_bytes(body);
             <Self as Deserialize<'a>>::deserialize_in_place(&mut de, model)
                 .map_err(|e| map_body_error(body, e))?;
-            if !de.finalize().map_err(map_postcard)?.is_empty() {
-                return Err(BlobError::Malformed);
-            }
+            let rest = de.finalize().map_err(map_postcard)?;
+            model.rbf.masks = Self::trailing_masks(model.version, rest)?;
             model.validate()
         });
         if result.is_err() {
             *place = None;
         }
         result
+    }
+
+    /// The masks after the residual level (format 3 on; none before), and nothing after them.
+    fn trailing_masks(version: u16, rest: &[u8]) -> Result<Vec<u8, C>, BlobError> {
+        if version < MASKS_SINCE {
+            return if rest.is_empty() {
+                Ok(Vec::new())
+            } else {
+                Err(BlobError::Malformed)
+            };
+        }
+        let (masks, after) = postcard::take_from_bytes::<Vec<u8, C>>(rest).map_err(map_postcard)?;
+        if !after.is_empty() {
+            return Err(BlobError::Malformed);
+        }
+        Ok(masks)
     }
 
     /// An empty model for [`decode_into`](Self::decode_into) to overwrite field by field.

@@ -31,6 +31,9 @@
 //!   model gives at most 1 plus rounding). A trained model's `p` is exact to f32 rounding, and its
 //!   slack `c·A` near a center `z₀` is about `c·4g‖z₀‖²`: −24 is reached only by a center several
 //!   hundred widths from the normalised origin, where the expanded form has lost all accuracy anyway.
+//!   A center of an additive model ([`Rbf::masks`]) sums over its masked features only: the others
+//!   contribute exactly zero and are left out of its bound (`‖z‖²` over every feature still bounds
+//!   its largest `A` from above).
 //! * **Fast exponential.** For `u ∈ [−24, EVAL_CUTOFF)` [`crate::fastexp::exp2_16_neg`] is within
 //!   [`crate::fastexp::EXP2_REL_ERR`] of `2^(−u/16)`, so a Gaussian contributes at most
 //!   `|w|·(1 + 1e-5)` when the bound is `≥ 0`, `|w|·2^1.5·(1 + 1e-5)` when it is in `[−24, 0)`, and
@@ -172,13 +175,18 @@ pub fn check<const C: usize, const F: usize>(
     let c = rounding(2 * nf + 6) + 3.0 * EPS;
     let mut gauss_abs = 0.0f32;
     let mut min_exponent = f32::INFINITY;
-    for center in &rbf.centers {
+    for (j, center) in rbf.centers.iter().enumerate() {
         let (p, g) = (center.p, center.g);
         let alpha = g * (1.0 - c);
         let mut a_max = p + g * zz_max;
         let mut lower = p * (1.0 - c);
         let mut magnitude = lower;
-        for (&(a, b), &q) in gauss.iter().zip(&center.q.0).take(nf) {
+        for (k, (&(a, b), &q)) in gauss.iter().zip(&center.q.0).take(nf).enumerate() {
+            // A feature outside the center's mask adds nothing to its exponent (`q` is zero there,
+            // [`Rbf::validate`] insists, and the masked sum skips its square).
+            if !rbf.spans(j, k) {
+                continue;
+            }
             a_max += q.abs() * a.abs().max(b.abs());
             // u − c·A on each side of zero: (1 − c)g·t² + (q ∓ c|q|)·t.
             let right = min_quadratic(alpha, q - c * q.abs(), a.max(0.0), b);

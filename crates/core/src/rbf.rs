@@ -15,6 +15,15 @@
 //! rounding in `‖z‖² + ‖c‖²` instead of `‖z − c‖²`: an error in the exponent of about
 //! `γ·(‖z‖² + ‖c‖²)·2.4e-7`, i.e. a relative error below 1e-5 for normalised features within ±2.
 //!
+//! # Additive structure
+//! A model may be a sum of terms over groups of features (a thermal bias plus a term in a supply
+//! voltage, say): then each center carries a feature mask ([`Rbf::masks`]), and its distance runs
+//! over the masked features only, `uj = pj + gj·Σ_{k∈Mj} zk² + Σ_{k∈Mj} qjk·zk` (`qjk = 0` outside
+//! `Mj`). A Gaussian over the thermal group then does not fade where the supply voltage goes
+//! somewhere the training run never took it. Without masks (blob formats 1 and 2, or a model whose
+//! centers all span every feature) the evaluation is the plain one above, bit for bit; with masks
+//! the masked sum runs in the same feature order, so a full mask gives the same bits too.
+//!
 //! Summation order is fixed and no fused multiply-add is used: host and Cortex-M4F give identical
 //! bits. A center whose exponent exceeds [`EXP_CUTOFF`] contributes less than `2e-9·|w|` and is skipped.
 
@@ -86,6 +95,11 @@ pub struct Rbf<const C: usize, const F: usize> {
     pub linear: Point<F>,
     /// Output offset `w0`.
     pub bias: f32,
+    /// Feature mask of each center (bit k: feature k enters its distance), or empty: every center
+    /// spans every feature. Stored after the rest of the blob, from format 3 on (see
+    /// [`crate::blob`]), so the derived layout of this struct is the one formats 1 and 2 have.
+    #[serde(skip)]
+    pub masks: Vec<u8, C>,
 }
 
 /// Why RBF coefficients are unusable; the `&str` names the field.
@@ -106,6 +120,7 @@ impl<const C: usize, const F: usize> Default for Rbf<C, F> {
             centers: Vec::new(),
             linear: Point::default(),
             bias: 0.0,
+            masks: Vec::new(),
         }
     }
 }
@@ -150,6 +165,9 @@ impl<const C: usize, const F: usize> Rbf<C, F> {
     /// `Σj wj·exp(−γj‖z − cj‖²)` in the expanded form, `zz = ‖z‖²`.
     #[inline(always)]
     fn gaussians(&self, z: &[f32; F], zz: f32) -> f32 {
+        if !self.masks.is_empty() {
+            return self.masked_gaussians(z);
+        }
         let mut acc = 0.0f32;
         for c in &self.centers {
             let mut u = c.p + c.g * zz;
@@ -161,6 +179,38 @@ impl<const C: usize, const F: usize> Rbf<C, F> {
             }
         }
         acc
+    }
+
+    /// The Gaussians of an additive model: each center's squared distance over its masked features
+    /// only, summed in feature order as `‖z‖²` is (so a full mask gives the plain sum's bits).
+    #[inline(always)]
+    fn masked_gaussians(&self, z: &[f32; F]) -> f32 {
+        let mut sq = [0.0f32; F];
+        for (s, zk) in sq.iter_mut().zip(z) {
+            *s = *zk * *zk;
+        }
+        let mut acc = 0.0f32;
+        for (c, &mask) in self.centers.iter().zip(&self.masks) {
+            let mut zz = 0.0f32;
+            for (k, s) in sq.iter().enumerate() {
+                if mask >> k & 1 == 1 {
+                    zz += *s;
+                }
+            }
+            let mut u = c.p + c.g * zz;
+            for (qk, zk) in c.q.0.iter().zip(z) {
+                u += *qk * *zk;
+            }
+            if u < EVAL_CUTOFF {
+                acc += c.w * exp2_16_neg(u);
+            }
+        }
+        acc
+    }
+
+    /// Whether feature `k` enters center `j`'s distance.
+    pub fn spans(&self, j: usize, k: usize) -> bool {
+        self.masks.get(j).is_none_or(|m| m >> k & 1 == 1)
     }
 
     /// Cutoff of the basis in natural units (for documentation and tools).
@@ -198,6 +248,33 @@ impl<const C: usize, const F: usize> Rbf<C, F> {
                 return Err(RbfError::Inconsistent(
                     "rbf.centers: g must be > 0 and p >= 0",
                 ));
+            }
+        }
+        if !self.masks.is_empty() {
+            if self.masks.len() != self.centers.len() {
+                return Err(RbfError::Inconsistent("rbf.masks: one per center"));
+            }
+            // u8 masks: at most 8 features (the host's capacity), and only used ones.
+            if nf > 8 {
+                return Err(RbfError::Inconsistent("rbf.masks: more than 8 features"));
+            }
+            let used = if nf >= 8 { u8::MAX } else { (1u8 << nf) - 1 };
+            for (c, &m) in self.centers.iter().zip(&self.masks) {
+                if m == 0 || m & !used != 0 {
+                    return Err(RbfError::Inconsistent(
+                        "rbf.masks: a mask must name at least one used feature and no other",
+                    ));
+                }
+                let outside_zero =
+                    c.q.0
+                        .iter()
+                        .enumerate()
+                        .all(|(k, q)| m >> k & 1 == 1 || *q == 0.0);
+                if !outside_zero {
+                    return Err(RbfError::Inconsistent(
+                        "rbf.masks: q must be zero outside a center's mask",
+                    ));
+                }
             }
         }
         // Unused feature slots must be inert: zero scale, so z is zero there whatever the input.
