@@ -39,7 +39,10 @@
 //! temperature the Gaussians win by far more than the margin and nothing changes (every simulated
 //! case of `search_eval` but one kept its model; that one, rate-driven with a cubic in T, improved).
 
+mod additive;
 mod search;
+
+pub use additive::StructureReport;
 
 use crate::rbf64::{Rbf64, mean_std, split_weights};
 use nalgebra::{DMatrix, DVector};
@@ -55,6 +58,10 @@ pub struct BayesOptions {
     pub centers: Option<usize>,
     /// Seed of k-means++.
     pub seed: u64,
+    /// Feature names, for the structure's description (`f0`, `f1`… when empty).
+    pub names: Vec<String>,
+    /// Offer the additive structure of [`additive`] beside the joint model.
+    pub additive: bool,
 }
 
 impl Default for BayesOptions {
@@ -63,6 +70,8 @@ impl Default for BayesOptions {
             linear: true,
             centers: None,
             seed: 1,
+            names: Vec::new(),
+            additive: true,
         }
     }
 }
@@ -102,6 +111,8 @@ pub struct BayesFit {
     /// Log evidence of the best model of the other basis (when both were compared), in the same
     /// units as [`Evidence::log_evidence`]: how close the call was.
     pub other_basis_log_evidence: Option<f64>,
+    /// The structure chosen (joint, additive, cubic, linear) and every structure compared.
+    pub structure: StructureReport,
 }
 
 /// Which basis a Bayesian fit uses besides the bias and the linear term.
@@ -219,7 +230,20 @@ pub fn fit_offering_cubic(
     cubic: Option<&[Vec<f64>]>,
     opts: &BayesOptions,
 ) -> Option<BayesFit> {
-    let search = Search::new(x, y, opts);
+    fit_binned(x, y, cubic, None, opts)
+}
+
+/// [`fit_offering_cubic`] on bin means `x` whose bins' parts are `sub` (per bin, the feature means
+/// over its parts, [`crate::method::TrainingSet::sub_x`]): the additive search averages its
+/// Gaussians over them ([`additive`]).
+pub fn fit_binned(
+    x: &[Vec<f64>],
+    y: &[f64],
+    cubic: Option<&[Vec<f64>]>,
+    sub: Option<&[Vec<Vec<f64>>]>,
+    opts: &BayesOptions,
+) -> Option<BayesFit> {
+    let search = Search::new(x, y, sub, opts);
     let mut evaluated = 0;
     let grid = search.grid();
     let mut best = search.first_scan(&grid, &mut evaluated)?;
@@ -231,7 +255,12 @@ pub fn fit_offering_cubic(
     // The cubic in the first feature, when offered: one candidate of its own basis.
     let cubic = cubic.and_then(|p| cubic_candidate(&search.xmat, p, &search.yn));
     evaluated += usize::from(cubic.is_some());
-    search.choose(best, cubic, margin, evaluated)
+    let additive = if opts.additive {
+        search.additive(&mut evaluated)
+    } else {
+        None
+    };
+    search.choose(best, cubic, additive, margin, evaluated)
 }
 
 /// Hyperparameters and evidence of a fit to targets normalised by `ys`, back in the target's units.
@@ -250,6 +279,8 @@ struct CubicCandidate {
     fit: Fitted,
     mean: Vec<f64>,
     std: Vec<f64>,
+    /// Its design, for the whitened comparison with an additive structure.
+    phi: DMatrix<f64>,
 }
 
 fn cubic_candidate(
@@ -281,7 +312,12 @@ fn cubic_candidate(
         }
     }
     let fit = evidence_fit(&phi, yn, d + 2)?;
-    Some(CubicCandidate { fit, mean, std })
+    Some(CubicCandidate {
+        fit,
+        mean,
+        std,
+        phi,
+    })
 }
 
 impl CubicCandidate {
@@ -311,6 +347,7 @@ impl CubicCandidate {
             weights: Vec::new(),
             linear: lin.iter().map(|w| w * ys).collect(),
             bias: ym + ys * b0,
+            masks: Vec::new(),
         };
         BayesFit {
             rbf,
@@ -320,6 +357,7 @@ impl CubicCandidate {
             evaluated,
             basis: Basis::Cubic,
             other_basis_log_evidence: Some(gauss_log_evidence - n as f64 * ys.ln()),
+            structure: StructureReport::default(),
         }
     }
 }
@@ -379,9 +417,11 @@ impl crate::method::FitMethod for Bayes {
             linear: opts.linear,
             centers: opts.centers,
             seed: opts.seed,
+            names: set.spec.features.clone(),
+            additive: opts.additive,
         };
         let offered = cubic.as_ref().map(|c| c.rows.as_slice());
-        let f = fit_offering_cubic(&set.x, &set.y, offered, &bo).ok_or(
+        let f = fit_binned(&set.x, &set.y, offered, Some(&set.sub_x), &bo).ok_or(
             crate::error::TrainError::FitFailed {
                 method: "bayes",
                 what: "the evidence iteration failed on every setting",
@@ -401,6 +441,7 @@ impl crate::method::FitMethod for Bayes {
                 basis: Some(f.basis),
                 other_basis_log_evidence: f.other_basis_log_evidence,
                 select: None,
+                structure: Some(f.structure),
             },
         })
     }

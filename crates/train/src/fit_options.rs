@@ -49,6 +49,8 @@ pub struct FitOptions {
     pub linear: bool,
     /// Offer `bayes` the cubic in the first feature as a basis (chosen only by evidence).
     pub cubic: bool,
+    /// Offer `bayes` the additive structure beside the joint model (chosen only by evidence).
+    pub additive: bool,
     /// How `mse` places its centers.
     pub select: CenterSelection,
     /// Gap threshold (s); default 10× the median step.
@@ -94,6 +96,7 @@ impl FitOptions {
             centers: None,
             linear: true,
             cubic: true,
+            additive: true,
             select: CenterSelection::Kmeans,
             gap_s: None,
             power_on_s: None,
@@ -200,6 +203,9 @@ impl FitOptions {
         }
         if let Some(c) = m.cubic {
             self.cubic = c;
+        }
+        if let Some(a) = m.additive {
+            self.additive = a;
         }
         if let Some(s) = &m.select {
             self.select = s.parse()?;

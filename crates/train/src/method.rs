@@ -43,6 +43,10 @@ pub struct TrainingSet {
     pub ranges: Vec<FeatureRange>,
     /// Training rows (raw feature units), one per bin.
     pub x: Vec<Vec<f64>>,
+    /// Per bin, the means of its features over up to [`crate::rows::SUB_BINS`] equal parts of it
+    /// (raw units): what a fit averages a nonlinear basis over, so that a bin's model is the mean
+    /// of the model over the bin, as its target is the mean of the error (see [`crate::bayes`]).
+    pub sub_x: Vec<Vec<Vec<f64>>>,
     /// Error (target − reference), one per bin.
     pub y: Vec<f64>,
     /// Warnings for the summary.
@@ -65,6 +69,8 @@ pub struct MethodDetails {
     pub basis: Option<Basis>,
     /// Log evidence of the best model of the other basis (bayes, when the cubic was offered).
     pub other_basis_log_evidence: Option<f64>,
+    /// The structure the evidence chose and every structure compared (bayes).
+    pub structure: Option<crate::bayes::StructureReport>,
 }
 
 /// A method's result.

@@ -109,6 +109,7 @@ pub fn fit_selecting(
         gamma,
         weights,
         bias,
+        masks: Vec::new(),
     })
 }
 

@@ -51,6 +51,7 @@ pub fn fit(x: &[Vec<f64>], y: &[f64]) -> Result<Rbf64, TrainError> {
         weights: Vec::new(),
         linear,
         bias,
+        masks: Vec::new(),
     })
 }
 

@@ -32,6 +32,10 @@ pub struct Rbf64 {
     pub linear: Vec<f64>,
     /// Output offset.
     pub bias: f64,
+    /// Feature mask per center (bit k: feature k enters its distance; the center's coordinates
+    /// outside it are zero), or empty: every center spans every feature. An additive model's
+    /// groups (see [`crate::bayes`]), carried to the core's [`Rbf::masks`].
+    pub masks: Vec<u8>,
 }
 
 impl Rbf64 {
@@ -51,8 +55,14 @@ impl Rbf64 {
         for (l, zk) in self.linear.iter().zip(&z) {
             acc += l * zk;
         }
-        for ((c, g), w) in self.centers.iter().zip(&self.gamma).zip(&self.weights) {
-            acc += w * (-g * crate::kmeans::dist2(&z, c)).exp();
+        for (j, ((c, g), w)) in self
+            .centers
+            .iter()
+            .zip(&self.gamma)
+            .zip(&self.weights)
+            .enumerate()
+        {
+            acc += w * (-g * masked_dist2(&z, c, self.masks.get(j).copied())).exp();
         }
         acc
     }
@@ -78,6 +88,9 @@ impl Rbf64 {
                 .push(Center::from_natural(c, *g, *w))
                 .map_err(|_| self.over_capacity())?;
         }
+        for m in &self.masks {
+            rbf.masks.push(*m).map_err(|_| self.over_capacity())?;
+        }
         Ok(rbf)
     }
 
@@ -88,6 +101,20 @@ impl Rbf64 {
             centers: self.centers.len(),
             max_centers: C,
         }
+    }
+}
+
+/// `‖z − c‖²` over the features of `mask` (every feature when `None`).
+pub fn masked_dist2(z: &[f64], c: &[f64], mask: Option<u8>) -> f64 {
+    match mask {
+        None => crate::kmeans::dist2(z, c),
+        Some(m) => z
+            .iter()
+            .zip(c)
+            .enumerate()
+            .filter(|(k, _)| *k < 8 && m >> k & 1 == 1)
+            .map(|(_, (a, b))| (a - b) * (a - b))
+            .sum(),
     }
 }
 

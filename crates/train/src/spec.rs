@@ -179,6 +179,14 @@ crate::layer! {
             arg(long = "no-cubic", num_args = 0, default_missing_value = "false")
         )]
         pub cubic: Option<bool>,
+        /// Do not offer bayes the additive structure (one-feature Gaussians placed one by one
+        /// beside the linear term, judged under AR(1) noise; chosen only by evidence); spec key
+        /// `additive = false`.
+        #[cfg_attr(
+            feature = "cli",
+            arg(long = "no-additive", num_args = 0, default_missing_value = "false")
+        )]
+        pub additive: Option<bool>,
         /// Center selection of mse: kmeans (default) or ols (orthogonal least squares forward
         /// selection).
         #[cfg_attr(feature = "cli", arg(long))]

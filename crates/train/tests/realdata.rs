@@ -50,6 +50,14 @@ fn verify_avg(
     o.average_s = average_s;
     o.until = Some(split);
     let f = fit(data, &o).unwrap();
+    if let Some(s) = &f.summary.details.structure {
+        println!("  {target} {features:?}: {}", s.chosen);
+        if std::env::var("SHOW").is_ok() {
+            for (n, e) in &s.compared {
+                println!("      {e:>10.1}  {n}");
+            }
+        }
+    }
     let bytes = f.model.to_bytes().unwrap();
     let m = blob_io::decode(std::path::Path::new("mem"), &bytes).unwrap();
     let v = data.select_time(time, split, f64::INFINITY).unwrap();

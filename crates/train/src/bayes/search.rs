@@ -7,6 +7,7 @@
 //! each number of centers for the parsimony rule; [`Search`] holds both, so each step is a short
 //! method instead of one long function of closures.
 
+use super::additive::{Additive, StructureReport};
 use super::{
     Basis, BayesFit, BayesOptions, CubicCandidate, FIRST_WIDTHS, Fitted, PARSIMONY, evidence_fit,
     margin_inflation, to_target_units,
@@ -163,25 +164,33 @@ where
 /// The standardised problem of one evidence search, and the best candidate seen so far for each
 /// number of centers (for the parsimony rule).
 pub(super) struct Search<'o> {
-    opts: &'o BayesOptions,
+    pub(super) opts: &'o BayesOptions,
     /// Feature means and inverse standard deviations.
-    xm: Vec<f64>,
-    unit: Vec<f64>,
+    pub(super) xm: Vec<f64>,
+    pub(super) unit: Vec<f64>,
     /// Target mean and standard deviation.
-    ym: f64,
-    ys: f64,
+    pub(super) ym: f64,
+    pub(super) ys: f64,
     /// Standardised rows, as rows and as a matrix.
     xstd: Vec<Vec<f64>>,
     pub(super) xmat: DMatrix<f64>,
     /// Standardised targets.
     pub(super) yn: DVector<f64>,
+    /// Per row, its feature means over the parts of its bin, standardised (see
+    /// [`super::additive`]); `None`: the rows are points.
+    pub(super) sub: Option<Vec<Vec<Vec<f64>>>>,
     /// Linear columns.
-    nl: usize,
+    pub(super) nl: usize,
     best_per_m: Mutex<BTreeMap<usize, Candidate>>,
 }
 
 impl<'o> Search<'o> {
-    pub(super) fn new(x: &[Vec<f64>], y: &[f64], opts: &'o BayesOptions) -> Self {
+    pub(super) fn new(
+        x: &[Vec<f64>],
+        y: &[f64],
+        sub: Option<&[Vec<Vec<f64>>]>,
+        opts: &'o BayesOptions,
+    ) -> Self {
         let n = x.len();
         let d = x.first().map_or(0, Vec::len);
         let (xm, xs) = mean_std(x);
@@ -195,8 +204,14 @@ impl<'o> Search<'o> {
         let xmat = DMatrix::from_fn(n, d, |i, k| {
             xstd.get(i).and_then(|r| r.get(k)).copied().unwrap_or(0.0)
         });
+        let sub = sub.filter(|s| s.len() == n).map(|s| {
+            s.iter()
+                .map(|parts| normalise_rows(parts, &xm, &unit))
+                .collect()
+        });
         Self {
             opts,
+            sub,
             xm,
             unit,
             ym,
@@ -209,7 +224,7 @@ impl<'o> Search<'o> {
         }
     }
 
-    fn n(&self) -> usize {
+    pub(super) fn n(&self) -> usize {
         self.xstd.len()
     }
 
@@ -295,15 +310,27 @@ impl<'o> Search<'o> {
 
     /// The Occam margin, from the serial correlation of the first scan's best model's residual.
     pub(super) fn margin(&self, best: &Candidate) -> f64 {
-        let phi = candidate_design(
-            &self.xmat,
-            self.opts.linear,
-            &best.ls,
-            &best.centers,
-            best.sigma,
-        );
-        let r = &self.yn - phi * DVector::from_column_slice(&best.fit.w);
-        PARSIMONY * margin_inflation(r.as_slice())
+        PARSIMONY * margin_inflation(self.residual(best).as_slice())
+    }
+
+    fn residual(&self, best: &Candidate) -> DVector<f64> {
+        let phi = self.design_of(best);
+        &self.yn - phi * DVector::from_column_slice(&best.fit.w)
+    }
+
+    fn design_of(&self, c: &Candidate) -> DMatrix<f64> {
+        candidate_design(&self.xmat, self.opts.linear, &c.ls, &c.centers, c.sigma)
+    }
+
+    /// The prior groups of a joint candidate's design (bias, linear, Gaussians).
+    fn groups_of(&self, c: &Candidate) -> Vec<usize> {
+        (0..1 + self.nl + c.centers.len())
+            .map(|i| match i {
+                0 => 0,
+                i if i <= self.nl => 1,
+                _ => 2,
+            })
+            .collect()
     }
 
     /// One round of coordinate search: a walk along each feature's length scale, one re-clustering
@@ -370,6 +397,7 @@ impl<'o> Search<'o> {
         &self,
         mut best: Candidate,
         cubic: Option<CubicCandidate>,
+        additive: Option<Additive>,
         margin: f64,
         evaluated: usize,
     ) -> Option<BayesFit> {
@@ -387,15 +415,125 @@ impl<'o> Search<'o> {
         let linear_only = per.iter().find(|c| c.m == 0 && ev(&c.fit) >= top - margin);
         let choose_cubic =
             linear_only.is_none() && cubic.as_ref().is_some_and(|c| ev(&c.fit) >= top - margin);
-        if let (true, Some(c)) = (choose_cubic, cubic.as_ref()) {
+        // The structures compared, in target units, for the report.
+        let units = |e: f64| e - n as f64 * self.ys.ln();
+        let d = self.d();
+        let mut compared: Vec<(String, f64)> = Vec::new();
+        if let Some(l) = per.iter().find(|c| c.m == 0) {
+            compared.push(("linear term alone".into(), units(ev(&l.fit))));
+        }
+        if let Some(c) = cubic.as_ref() {
+            compared.push(("cubic in the first feature".into(), units(ev(&c.fit))));
+        }
+        compared.push((self.joint_name(&best), units(gauss_top)));
+        // The parsimonious pick among linear, cubic and joint Gaussians, as before. The additive
+        // structure replaces it only on strong evidence (the Occam margin), both judged under
+        // AR(1) noise whose coefficient the evidence chooses for each (see [`super::additive`]).
+        let pick_ev = additive.as_ref().and_then(|_| {
+            let (name, phi, groups) = if let Some(l) = linear_only {
+                (
+                    "linear term alone".to_string(),
+                    self.design_of(l),
+                    self.groups_of(l),
+                )
+            } else if let (true, Some(c)) = (choose_cubic, cubic.as_ref()) {
+                let groups = (0..c.phi.ncols()).map(|i| usize::from(i > 0)).collect();
+                (
+                    "cubic in the first feature".to_string(),
+                    c.phi.clone(),
+                    groups,
+                )
+            } else {
+                let p = per
+                    .iter()
+                    .find(|c| ev(&c.fit) >= top - margin)
+                    .unwrap_or(&best);
+                (self.joint_name(p), self.design_of(p), self.groups_of(p))
+            };
+            self.evidence_ar1(&phi, &groups).map(|(e, r)| (name, e, r))
+        });
+        if let Some(a) = additive.as_ref() {
+            compared.push((
+                format!("{}, AR(1) noise ρ {:.2}", self.describe(a), a.rho),
+                units(a.fit.ev.log_evidence),
+            ));
+            if let Some((name, e, r)) = &pick_ev {
+                compared.push((format!("{name}, AR(1) noise ρ {r:.2}"), units(*e)));
+            }
+        }
+        let pick_ev = pick_ev.map(|(_, e, _)| e);
+        compared.sort_by(|a, b| b.1.total_cmp(&a.1));
+        if let (Some(a), Some(pick_ev)) = (additive, pick_ev)
+            && a.fit.ev.log_evidence > pick_ev + margin
+            && Self::has_atoms(&a)
+        {
+            let (rbf, evidence) = self.additive_fit(&a);
+            let chosen = self.describe(&a);
+            return Some(BayesFit {
+                rbf,
+                evidence,
+                width: a.atoms.first().map_or(0.0, |b| b.sigma),
+                // As for a joint model, 64 marks a feature left to the linear term.
+                length_scales: (0..d)
+                    .map(|k| {
+                        if a.atoms.iter().any(|t| t.feats.contains(&k)) {
+                            1.0
+                        } else {
+                            64.0
+                        }
+                    })
+                    .collect(),
+                evaluated,
+                basis: Basis::Gaussians,
+                other_basis_log_evidence: cubic.map(|c| units(ev(&c.fit))),
+                structure: StructureReport { chosen, compared },
+            });
+        }
+        if let (true, Some(c)) = (choose_cubic && linear_only.is_none(), cubic.as_ref()) {
             let (xm, unit, ym, ys) = (&self.xm, &self.unit, self.ym, self.ys);
-            return Some(c.finish(xm, unit, ym, ys, n, evaluated, gauss_top));
+            let mut f = c.finish(xm, unit, ym, ys, n, evaluated, gauss_top);
+            f.structure = StructureReport {
+                chosen: "cubic in the first feature".into(),
+                compared,
+            };
+            return Some(f);
         }
         if let Some(c) = per.into_iter().find(|c| ev(&c.fit) >= top - margin) {
             best = c;
         }
         let other = cubic.map(|c| ev(&c.fit) - n as f64 * self.ys.ln());
-        Some(self.gaussian_fit(best, evaluated, other))
+        let chosen = if best.m == 0 {
+            "linear term alone".to_string()
+        } else {
+            self.joint_name(&best)
+        };
+        let mut f = self.gaussian_fit(best, evaluated, other);
+        f.structure = StructureReport { chosen, compared };
+        Some(f)
+    }
+
+    /// A joint model in words.
+    fn joint_name(&self, c: &Candidate) -> String {
+        if c.m == 0 {
+            return "linear term alone".into();
+        }
+        let name = |k: usize| {
+            self.opts
+                .names
+                .get(k)
+                .cloned()
+                .unwrap_or_else(|| format!("f{k}"))
+        };
+        let on: Vec<String> = (0..self.d())
+            .filter(|&k| c.ls.get(k).is_some_and(|l| *l < 64.0))
+            .map(name)
+            .collect();
+        format!(
+            "joint: {} Gaussians over ({}), σ {:.2}",
+            c.m,
+            on.join(", "),
+            c.sigma
+        )
     }
 
     /// The chosen Gaussian model as an [`Rbf64`] in the target's units.
@@ -420,6 +558,7 @@ impl<'o> Search<'o> {
                 vec![0.0; d]
             },
             bias: self.ym + ys * b0,
+            masks: Vec::new(),
         };
         BayesFit {
             rbf,
@@ -429,6 +568,7 @@ impl<'o> Search<'o> {
             evaluated,
             basis: Basis::Gaussians,
             other_basis_log_evidence: other,
+            structure: StructureReport::default(),
         }
     }
 }
