@@ -111,7 +111,14 @@ pub fn prepare(
     let x: Vec<Vec<f64>> = (0..n)
         .map(|i| cols.iter().map(|c| c[i]).collect())
         .collect();
-    let fit = bayes::fit(&x, &yb, &BayesOptions::default()).ok_or_else(|| {
+    // The joint model of the evidence search, without the additive structure: the candidates are
+    // scored against this base (see `score`), and the additive search's AR(1) evidence is a
+    // different yardstick from the one the acceptance rule is calibrated on.
+    let opts_base = BayesOptions {
+        additive: false,
+        ..BayesOptions::default()
+    };
+    let fit = bayes::fit(&x, &yb, &opts_base).ok_or_else(|| {
         DiscoverError::Invalid("the evidence iteration of the base model failed".into())
     })?;
     let (mean, sd): (Vec<f64>, Vec<f64>) = cols

@@ -161,6 +161,9 @@ impl<'a> Refits<'a> {
         o.gap_s = self.gap_s;
         o.spec.signals.clone_from(&self.info.spec.signals);
         o.spec.features = features.to_vec();
+        // The joint model's evidence only: refits of different feature sets are compared on it,
+        // and the additive structure's (under AR(1) noise) is another yardstick.
+        o.additive = false;
         o
     }
 

@@ -62,6 +62,8 @@ pub struct BayesOptions {
     pub names: Vec<String>,
     /// Offer the additive structure of [`additive`] beside the joint model.
     pub additive: bool,
+    /// Per feature, how it may enter the Gaussians ([`crate::pin`]); empty: all free.
+    pub pins: Vec<crate::pin::Pin>,
 }
 
 impl Default for BayesOptions {
@@ -72,6 +74,7 @@ impl Default for BayesOptions {
             seed: 1,
             names: Vec::new(),
             additive: true,
+            pins: Vec::new(),
         }
     }
 }
@@ -399,7 +402,8 @@ impl crate::method::FitMethod for Bayes {
         opts: &crate::train::FitOptions,
         _progress: &dyn crate::progress::Progress,
     ) -> Result<crate::method::MethodFit, crate::error::TrainError> {
-        let cubic = if opts.linear && opts.cubic && opts.centers.is_none() {
+        let first_free = opts.pins.first() != Some(&crate::pin::Pin::Linear);
+        let cubic = if opts.linear && opts.cubic && opts.centers.is_none() && first_free {
             let time = set.data.time(&opts.time)?;
             crate::cubic::cubic_basis(
                 &set.spec,
@@ -419,6 +423,7 @@ impl crate::method::FitMethod for Bayes {
             seed: opts.seed,
             names: set.spec.features.clone(),
             additive: opts.additive,
+            pins: opts.pins.clone(),
         };
         let offered = cubic.as_ref().map(|c| c.rows.as_slice());
         let f = fit_binned(&set.x, &set.y, offered, Some(&set.sub_x), &bo).ok_or(

@@ -51,6 +51,9 @@ pub struct FitOptions {
     pub cubic: bool,
     /// Offer `bayes` the additive structure beside the joint model (chosen only by evidence).
     pub additive: bool,
+    /// Per feature, how it may enter the Gaussians (from the `linear:` / `additive:` marks of the
+    /// features, see [`crate::pin`]); empty: every feature free.
+    pub pins: Vec<crate::pin::Pin>,
     /// How `mse` places its centers.
     pub select: CenterSelection,
     /// Gap threshold (s); default 10× the median step.
@@ -97,6 +100,7 @@ impl FitOptions {
             linear: true,
             cubic: true,
             additive: true,
+            pins: Vec::new(),
             select: CenterSelection::Kmeans,
             gap_s: None,
             power_on_s: None,

@@ -47,6 +47,7 @@ pub mod mse;
 pub mod num;
 pub mod ols;
 pub mod options;
+pub mod pin;
 pub mod poly3;
 pub mod progress;
 pub mod rbf64;

@@ -94,6 +94,17 @@ pub fn fit_with_progress(
         crate::progress::Unit::Iterations,
     );
     let method = opts.method.fitter();
+    // Structure pins (`linear:`, `additive:`) come off the feature expressions here.
+    let (features, pins) = crate::pin::split(&opts.spec.features)?;
+    let mut stripped;
+    let opts = if pins.iter().any(|p| *p != crate::pin::Pin::Free) {
+        stripped = opts.clone();
+        stripped.spec.features = features;
+        stripped.pins = pins;
+        &stripped
+    } else {
+        opts
+    };
     let (mut set, prepared) = prepare(data, opts)?;
     let after = if prepared.average_s > 0.0 {
         format!(" after averaging into {} s bins", prepared.average_s)

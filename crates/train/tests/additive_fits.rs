@@ -392,3 +392,39 @@ fn true_features_reach_the_floor_wherever_least_squares_does() {
         }
     }
 }
+
+/// `--feature 'linear:EXPR'` keeps a feature out of every Gaussian, joint or additive, and the mark
+/// does not reach the blob; `additive:EXPR` keeps it out of the joint Gaussians.
+#[test]
+fn pins_hold_a_feature_to_its_term() {
+    let c = cases().into_iter().find(|c| c.name == "supply").unwrap();
+    let p = build(&c);
+    let fit_with = |features: &[&str], additive: bool| {
+        let mut o = FitOptions::new(&p.target, &[]);
+        o.spec.signals = p.signals.clone();
+        o.spec.features = features.iter().map(|s| s.to_string()).collect();
+        o.reference = Some(p.reference.clone());
+        o.additive = additive;
+        fit(&p.train, &o).unwrap()
+    };
+    let pinned = ["t_qma_c", "rate(t_qma_c)", "linear:supply_v"];
+    for additive in [true, false] {
+        let f = fit_with(&pinned, additive);
+        assert_eq!(f.model.spec.features[2], "supply_v");
+        let ls = &f.summary.details.length_scales;
+        assert_eq!(ls.get(2), Some(&64.0), "{ls:?}");
+        let bytes = f.model.to_bytes().unwrap();
+        let m = blob_io::decode(std::path::Path::new("mem"), &bytes).unwrap();
+        assert!(
+            (0..m.rbf.centers.len())
+                .all(|j| !m.rbf.spans(j, 2) || m.rbf.masks.is_empty() && ls[2] == 64.0)
+        );
+        assert!(m.rbf.linear.0[2] != 0.0, "the linear term keeps it");
+    }
+    let f = fit_with(&["additive:t_qma_c", "rate(t_qma_c)", "supply_v"], false);
+    assert_eq!(f.summary.details.length_scales.first(), Some(&64.0));
+    let mut o = FitOptions::new(&p.target, &[]);
+    o.spec.features = vec!["lineer:t_qma_c".into()];
+    let err = fit(&p.train, &o).unwrap_err().to_string();
+    assert!(err.contains("lineer:t_qma_c"), "{err}");
+}

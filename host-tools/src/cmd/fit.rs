@@ -139,6 +139,12 @@ fn print_summary(s: &FitSummary, out: &std::path::Path, unit: &str) {
         ),
         _ => {}
     }
+    if let Some(st) = &d.structure {
+        outln!("structure   {}", st.chosen);
+        for (name, ev) in &st.compared {
+            outln!("  compared  log evidence {ev:>10.2}  {name}");
+        }
+    }
     if let Some(e) = &d.evidence {
         outln!(
             "evidence    α = {:.4e}  α_linear = {:.4e}  β = {:.4e}  γ = {:.2}  log evidence = {:.2}  ({} settings compared, {} iterations)",

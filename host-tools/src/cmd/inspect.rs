@@ -57,10 +57,12 @@ pub fn blob_json(args: &Args, bytes: &[u8], m: &HostModel<'_>) -> serde_json::Va
         .rbf
         .centers
         .iter()
-        .map(|c| {
+        .enumerate()
+        .map(|(j, c)| {
             let (pos, gamma, w) = c.to_natural();
             json!({
                 "center": pos.0.get(..nf).unwrap_or(&[]),
+                "features": spanned(m, j),
                 "gamma": gamma,
                 "sigma": c.sigma(),
                 "weight": w,
@@ -110,6 +112,7 @@ pub fn blob_json(args: &Args, bytes: &[u8], m: &HostModel<'_>) -> serde_json::Va
         "program_nodes": m.program.nodes.len(),
         "features": features,
         "bias": m.rbf.bias,
+        "structure": structure(m),
         "centers": centers,
         "residual": {
             "std": m.residual.std, "binned_std": m.residual.binned_std, "bin_s": m.residual.bin_s,
@@ -177,10 +180,16 @@ fn print_blob(args: &Args, bytes: &[u8], m: &HostModel<'_>) {
     }
     outln!("bias         {:.6e}", m.rbf.bias);
     outln!("centers      {}", m.rbf.centers.len());
+    outln!("structure    {}", structure(m));
     for (j, c) in m.rbf.centers.iter().enumerate() {
         let (pos, _, w) = c.to_natural();
+        let over = if m.rbf.masks.is_empty() {
+            String::new()
+        } else {
+            format!("  over {:?}", spanned(m, j))
+        };
         outln!(
-            "  {j:>3}  σ {:.3}  w {:+.4e}  at {:?}",
+            "  {j:>3}  σ {:.3}  w {:+.4e}  at {:?}{over}",
             c.sigma(),
             w,
             pos.0.get(..nf).unwrap_or(&[])
@@ -192,4 +201,45 @@ fn print_blob(args: &Args, bytes: &[u8], m: &HostModel<'_>) {
         m.residual.binned_std,
         m.residual.bin_s
     );
+}
+
+/// The features center `j` spans (indices into the program's features).
+fn spanned(m: &HostModel<'_>, j: usize) -> Vec<usize> {
+    (0..m.n_features()).filter(|&k| m.rbf.spans(j, k)).collect()
+}
+
+/// The model's structure in words, from the centers' masks (format 3): "joint" when every center
+/// spans every feature, else each group of features with its number of centers.
+pub fn structure(m: &HostModel<'_>) -> String {
+    if m.rbf.centers.is_empty() {
+        return "linear term alone (no Gaussians)".into();
+    }
+    if m.rbf.masks.is_empty() {
+        return format!(
+            "joint: {} Gaussians over every feature",
+            m.rbf.centers.len()
+        );
+    }
+    let mut groups: Vec<(Vec<usize>, usize)> = Vec::new();
+    for j in 0..m.rbf.centers.len() {
+        let f = spanned(m, j);
+        match groups.iter_mut().find(|(g, _)| *g == f) {
+            Some((_, n)) => *n += 1,
+            None => groups.push((f, 1)),
+        }
+    }
+    let name = |k: &usize| {
+        m.program
+            .feature_exprs
+            .get(*k)
+            .map_or_else(|| format!("f{k}"), |e| e.to_string())
+    };
+    let parts: Vec<String> = groups
+        .iter()
+        .map(|(f, n)| {
+            let names: Vec<String> = f.iter().map(name).collect();
+            format!("{n} Gaussians over ({})", names.join(", "))
+        })
+        .collect();
+    format!("additive: {} + the linear term", parts.join(" + "))
 }

@@ -214,7 +214,7 @@ impl Search<'_> {
     fn dictionary(&self) -> Vec<Atom> {
         let d = self.xmat.ncols();
         let mut atoms = Vec::new();
-        for k in 0..d {
+        for k in (0..d).filter(|&k| self.pin(k) != crate::pin::Pin::Linear) {
             let col = self.xmat.column(k);
             let (lo, hi) = col
                 .iter()

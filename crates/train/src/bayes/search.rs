@@ -13,6 +13,7 @@ use super::{
     margin_inflation, to_target_units,
 };
 use crate::kmeans::kmeans;
+use crate::pin::Pin;
 use crate::rbf64::{Rbf64, mean_std, normalise_rows, split_weights};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -224,6 +225,21 @@ impl<'o> Search<'o> {
         }
     }
 
+    /// How feature `k` may enter the Gaussians.
+    pub(super) fn pin(&self, k: usize) -> Pin {
+        self.opts.pins.get(k).copied().unwrap_or_default()
+    }
+
+    /// Unit length scales, but 64 (the far end: off for the joint Gaussians) for a pinned feature.
+    fn start_ls(&self) -> Vec<f64> {
+        (0..self.d())
+            .map(|k| match self.pin(k) {
+                Pin::Free => 1.0,
+                Pin::Linear | Pin::Additive => LENGTH_SCALES[LENGTH_SCALES.len() - 1],
+            })
+            .collect()
+    }
+
     pub(super) fn n(&self) -> usize {
         self.xstd.len()
     }
@@ -282,7 +298,7 @@ impl<'o> Search<'o> {
 
     /// Every number of centers with every other width and unit length scales.
     pub(super) fn first_scan(&self, grid: &[usize], evaluated: &mut usize) -> Option<Candidate> {
-        let ones = vec![1.0; self.d()];
+        let ones = self.start_ls();
         let per_m: Vec<(usize, Centers)> = grid
             .par_iter()
             .map(|&m| (m, self.cluster(m, &ones)))
@@ -342,7 +358,7 @@ impl<'o> Search<'o> {
         evaluated: &mut usize,
     ) -> Option<Candidate> {
         let start_ls = best.ls.clone();
-        for k in 0..self.d() {
+        for k in (0..self.d()).filter(|&k| self.pin(k) == Pin::Free) {
             let (m, s, old_ls) = (best.m, best.sigma, best.ls.clone());
             let centers = Arc::clone(&best.centers);
             let with = |v: f64| {
