@@ -10,7 +10,8 @@
 //! `uj = pj + gj·‖z‖² + Σk qjk·zk` with `pj = gj·‖cj‖²` and `qj = −2gj·cj`, so that
 //! `exp(−γj‖z − cj‖²) = 2^(−uj/16)`. Per center that is one multiply-add per feature plus one, instead
 //! of a subtraction, a multiply-add and a scaling, and the record `[p, q…, g, w]` is contiguous: on a
-//! Cortex-M4F a 32 × 4 evaluation fits in under 1,000 instructions (see BENCHMARKS.md).
+//! Cortex-M4F a 32 × 4 evaluation takes about 1,000 instructions, 1,600 with masks (see
+//! BENCHMARKS.md).
 //! [`Center::from_natural`] and [`Center::to_natural`] convert from and to `(c, γ, w)`. The price is
 //! rounding in `‖z‖² + ‖c‖²` instead of `‖z − c‖²`: an error in the exponent of about
 //! `γ·(‖z‖² + ‖c‖²)·2.4e-7`, i.e. a relative error below 1e-5 for normalised features within ±2.

@@ -39,6 +39,7 @@ fn main() {
     let len = model.encode(&mut blob).expect("example model encodes");
     blob.truncate(len);
     fs::write(out.join("smoke_model.tcm"), &blob).expect("write blob");
+    fs::write(out.join("smoke_additive.tcm"), additive_blob(&model)).expect("write blob");
 
     let decoded = Model::<'_, 32, 4, 24>::decode(&blob).expect("example blob decodes");
     let mut channel = Channel::<24, 4>::new(PERIOD_S);
@@ -59,4 +60,24 @@ fn main() {
         vector.extend_from_slice(&u32::from(o.status.0).to_le_bytes());
     }
     fs::write(out.join("smoke_vector.bin"), &vector).expect("write vector");
+}
+
+/// The example model made additive (blob format 3): each center over one feature, the features in
+/// turn, so every center takes the masked path of the evaluator.
+fn additive_blob(model: &Model<'static, 32, 4, 24>) -> Vec<u8> {
+    let mut m = model.clone();
+    let nf = m.n_features();
+    for j in 0..m.rbf.centers.len() {
+        let (c, gamma, w) = m.rbf.centers[j].to_natural();
+        let k = j % nf;
+        let mut cm = [0.0f64; 4];
+        cm[k] = f64::from(c.0[k]);
+        m.rbf.centers[j] = tcomp_core::Center::from_natural(&cm, f64::from(gamma), f64::from(w));
+        m.rbf.masks.push(1 << k).expect("32 masks");
+    }
+    m.version = Model::version_for(&m.program, &m.rbf);
+    let mut blob = vec![0u8; 8192];
+    let len = m.encode(&mut blob).expect("additive example encodes");
+    blob.truncate(len);
+    blob
 }

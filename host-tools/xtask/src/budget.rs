@@ -23,6 +23,15 @@ pub const CYCLES_PER_INSTRUCTION: u64 = 2;
 /// 2 KiB ring.
 pub const SAMPLE_TASK_INSTRUCTIONS: u64 = SAMPLE_TASK_CYCLES / CYCLES_PER_INSTRUCTION;
 
+/// Channels of the largest board description shipped (the IMU6: three gyros, three
+/// accelerometers).
+pub const MAX_CHANNELS: u64 = 6;
+/// One RBF evaluation at the firmware's capacity (32 centers × 4 features, joint or additive): half
+/// the sample task's budget shared by the largest board's channels, 8,750 instructions; the other
+/// half is the feature programs, the drivers' reads and the output frames (measured 10–11 k of the
+/// task's 105 k for six channels in the QEMU replay).
+pub const RBF_EVAL_INSTRUCTIONS: u64 = SAMPLE_TASK_INSTRUCTIONS / 2 / MAX_CHANNELS;
+
 /// The SRAM (SRAM1 + SRAM2, contiguous: statics) and the CCM (the stack alone), bytes.
 pub const SRAM: u64 = 128 * 1024;
 /// See [`SRAM`].
@@ -48,5 +57,6 @@ mod tests {
         assert_eq!(STATIC_RAM_BUDGET, 98_304);
         assert_eq!(STACK_BUDGET, 49_152);
         assert_eq!(FLASH_BUDGET, 786_432);
+        assert_eq!(RBF_EVAL_INSTRUCTIONS, 8_750);
     }
 }

@@ -97,6 +97,10 @@ fn fit_models(work: &Path) -> Result<()> {
         for axis in axes {
             let data = format!("{preset}/train.csv");
             let out = format!("{preset}-{axis}.tcm");
+            // The QMA's z channel is an additive model (blob format 3, per-center feature masks):
+            // T acts through a term of its own and the evidence places its Gaussians.
+            let additive = preset == "qma" && *axis == "z";
+            let centers: &[&str] = if additive { &[] } else { &["--centers", "32"] };
             let mut args = vec![
                 "fit",
                 "--data",
@@ -107,24 +111,51 @@ fn fit_models(work: &Path) -> Result<()> {
                 reference,
                 "--signal",
                 signal,
-                "--centers",
-                "32",
-                "--sensor",
-                sensor,
-                "--axis",
-                axis,
-                "--unit",
-                unit,
-                "--out",
-                &out,
-                "--quiet",
             ];
-            for f in &features {
+            args.extend_from_slice(centers);
+            args.extend_from_slice(&[
+                "--sensor", sensor, "--axis", axis, "--unit", unit, "--out", &out, "--quiet",
+            ]);
+            let pinned: Vec<String> = features
+                .iter()
+                .enumerate()
+                .map(|(k, f)| {
+                    if additive && k == 0 {
+                        format!("additive:{f}")
+                    } else {
+                        (*f).to_string()
+                    }
+                })
+                .collect();
+            for f in &pinned {
                 args.extend_from_slice(&["--feature", f]);
             }
             tcomp(work, &args)?;
+            if additive {
+                require_masks(&work.join(&out))?;
+            }
         }
     }
+    Ok(())
+}
+
+/// Refuses to go on unless the blob at `path` is an additive model (format 3, with masks): the
+/// run is meant to carry one through the firmware.
+fn require_masks(path: &Path) -> Result<()> {
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let m = tcomp_core::HostModel::decode(&bytes)
+        .map_err(|e| anyhow::anyhow!("{}: {e:?}", path.display()))?;
+    anyhow::ensure!(
+        !m.rbf.masks.is_empty(),
+        "{}: the fit chose no additive structure; the QEMU run needs one",
+        path.display()
+    );
+    eprintln!(
+        "{}: additive model, {} Gaussians, format {}",
+        path.display(),
+        m.rbf.centers.len(),
+        m.version
+    );
     Ok(())
 }
 

@@ -11,6 +11,8 @@ use tcomp_core::{Channel, Model, Status};
 
 /// The example RLG model, encoded by the build script with the host's `tcomp-core`.
 static BLOB: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_model.tcm"));
+/// The same model made additive (each center over one feature; blob format 3).
+static ADDITIVE: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_additive.tcm"));
 /// Per sample: anode, cathode, shell (°C), raw (deg/h), host-compensated (f32 LE), host status (u32 LE).
 static VECTOR: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_vector.bin"));
 const RECORD: usize = 24;
@@ -95,6 +97,21 @@ fn main() -> ! {
     }
     let t1 = counter.now();
     let per_eval = counter.instructions_between(t0, t1) / TIMED_EVALS;
+    // The same for the additive model (masked distances).
+    let additive = match Model::<'_, 32, 4, 24>::decode(ADDITIVE) {
+        Ok(m) => m,
+        Err(e) => {
+            hprintln!("FAIL: additive blob rejected: {}", e);
+            exit(false)
+        }
+    };
+    let t0 = counter.now();
+    for i in 0..TIMED_EVALS {
+        let x = core::hint::black_box(&points[(i & 7) as usize]);
+        sink += rbf_eval(&additive, x);
+    }
+    let t1 = counter.now();
+    let per_additive = counter.instructions_between(t0, t1) / TIMED_EVALS;
     let per_step = steps_instr.checked_div(steps).unwrap_or(0);
 
     hprintln!(
@@ -110,8 +127,9 @@ fn main() -> ! {
         sink
     );
     hprintln!(
-        "SMOKE-SUMMARY instructions_per_rbf_eval={} instructions_per_channel_step={}",
+        "SMOKE-SUMMARY instructions_per_rbf_eval={} instructions_per_additive_rbf_eval={} instructions_per_channel_step={}",
         per_eval,
+        per_additive,
         per_step
     );
     let ok = samples > 0 && mismatches == 0 && flagged >= 2 && corrupt_rejected && sink.is_finite();
