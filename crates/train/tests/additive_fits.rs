@@ -350,12 +350,18 @@ fn mean(rows: &[Row], f: fn(&Row) -> f64) -> f64 {
     rows.iter().map(f).sum::<f64>() / rows.len() as f64
 }
 
-/// Where the physics adds (a supply-voltage term beside the thermal bias; a saturating gradient
-/// term beside it), the additive structure generalises where one RBF over all features does not:
-/// measured on seeds 21/121/221 and 25/125/225, supply 1.2× against 2.7× the floor, two groups
-/// 1.3× against 2.7×. Every case but the sharp step stays within 1.5× of what least squares on the
-/// exact form reaches (a step 1 °C wide that the training run crosses once, inside one 120 s bin,
-/// is beyond every flexible fit here: 3.8× with the additive structure, 2.0× without).
+/// Where the physics adds a nonlinear term in a second group of features (a saturating thermometer
+/// gradient beside the thermal bias), the additive structure generalises where one RBF over all
+/// features does not. Every case but the sharp step stays within 1.5× of what least squares on the
+/// exact form reaches.
+///
+/// Measured on the seeds the method was developed on (21…225, this test's default), mean over
+/// three: supply 1.19× (joint model 3.27×, limit 1.10×), lagged input 1.41× (1.09×, 0.98×), knee
+/// 1.24× (1.38×, 1.13×), step 4.02× (2.02×, 1.09×), two groups 1.20× (2.68×, 1.06×). Run once on
+/// held-out seeds (`SEED_BASE=1000`): supply 1.56× (1.24×, 1.22×), lagged 1.36× (1.31×, 1.11×),
+/// knee 1.17× (1.27×, 1.00×), step 4.03× (2.06×, 1.14×), two groups 1.57× (2.41×, 1.04×). A step
+/// 1 °C wide that the training run crosses once, inside one 120 s bin, is beyond every flexible
+/// fit here, and the additive structure's narrow Gaussians do worse on it than the joint model's.
 #[test]
 fn additive_physics_is_fitted_near_the_least_squares_limit() {
     for (name, rows) in table() {
@@ -364,7 +370,7 @@ fn additive_physics_is_fitted_near_the_least_squares_limit() {
             mean(&rows, |r| r.joint),
             mean(&rows, |r| r.limit),
         );
-        if name == "supply" || name == "two-groups" {
+        if name == "two-groups" {
             assert!(fit < 0.8 * joint, "{name}: {fit:.2}x vs joint {joint:.2}x");
         }
         if name != "step" {
