@@ -38,6 +38,14 @@
 //! `bayes` at worst the regularised cubic (0.96–1.01). Where the truth is not a cubic in one
 //! temperature the Gaussians win by far more than the margin and nothing changes (every simulated
 //! case of `search_eval` but one kept its model; that one, rate-driven with a cubic in T, improved).
+//!
+//! A third structure competes with both: the additive model (module `additive`: one-feature
+//! Gaussians placed one by one beside a linear term with one prior per feature, judged under AR(1)
+//! noise), for physics that adds — a thermal bias plus a supply-voltage term — where one RBF over
+//! all features fades on a verification run that combines them as training never did. It replaces
+//! the pick above only when its evidence, and the pick's refitted under the same noise model, differ
+//! by the Occam margin. `--no-additive` (or [`BayesOptions::additive`]) leaves it out; the
+//! `linear:` and `additive:` marks of [`crate::pin`] hold a feature to its term in every structure.
 
 mod additive;
 mod search;
@@ -60,7 +68,7 @@ pub struct BayesOptions {
     pub seed: u64,
     /// Feature names, for the structure's description (`f0`, `f1`… when empty).
     pub names: Vec<String>,
-    /// Offer the additive structure of [`additive`] beside the joint model.
+    /// Offer the additive structure (module `bayes::additive`) beside the joint model.
     pub additive: bool,
     /// Per feature, how it may enter the Gaussians ([`crate::pin`]); empty: all free.
     pub pins: Vec<crate::pin::Pin>,
@@ -238,7 +246,7 @@ pub fn fit_offering_cubic(
 
 /// [`fit_offering_cubic`] on bin means `x` whose bins' parts are `sub` (per bin, the feature means
 /// over its parts, [`crate::method::TrainingSet::sub_x`]): the additive search averages its
-/// Gaussians over them ([`additive`]).
+/// Gaussians over them (the additive structure).
 pub fn fit_binned(
     x: &[Vec<f64>],
     y: &[f64],

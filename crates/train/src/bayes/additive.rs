@@ -15,20 +15,32 @@
 //! A dictionary of candidate Gaussians over each feature alone: positions evenly spread over its
 //! training range, σ of 1, 2, 4, 8 and 16 times the narrowest the binned data resolve (half of what
 //! one bin spans where the feature moves, see [`Search::resolution`]). The model starts as the bias
-//! and the linear term (one α per feature). Each step scores every candidate by the rise of the log evidence its addition would give
-//! with the other hyperparameters held (the closed form of Tipping and Faul:
-//! `ΔL = ½[(Q² − S)/S + ln(S/Q²)]` for `Q² > S`), refits the best four with every α and β
-//! ([`crate::evidence`]), and keeps the best if it raises the evidence by the Occam margin —
-//! [`super::PARSIMONY`] grown by the residual's serial correlation, as everywhere in [`super`]. It
-//! stops there, or at 32 Gaussians (the reference firmware's capacity) or one per 3 bins. A Gaussian
-//! whose α a later refit drives to infinity is removed.
+//! and the linear term (one α per feature). Each step scores every candidate by the rise of the
+//! log evidence its addition would give with the other hyperparameters held (the closed form of
+//! Tipping and Faul: `ΔL = ½[(Q² − S)/S + ln(S/Q²)]` for `Q² > S`), refits the best four with every
+//! α and β ([`crate::evidence`]) and the noise model below, and keeps the best if it raises the
+//! evidence by the Occam margin [`super::PARSIMONY`]. It stops there, or at 32 Gaussians (the
+//! reference firmware's capacity) or one per 3 bins. A Gaussian whose α a later refit drives to
+//! infinity is removed.
+//!
+//! # Serial correlation
+//! Bin means of a residual drift (bias instability, a thermometer's lag): a hold of an hour is 30
+//! bins that share one offset, and evidence that treats them as independent credits a narrow
+//! Gaussian at the hold's temperature with explaining all 30. Every model here is judged under
+//! AR(1) noise: targets and basis functions whitened (Prais–Winsten), with `ρ` a hyperparameter
+//! like α and β — the one of [`RHO_GRID`] with the highest evidence, `ln p(y) = ln p(y′) +
+//! ½ ln(1 − ρ²)` (the whitening's Jacobian), for each model. `ρ` is bounded by the run itself
+//! ([`Search::rho_max`]): noise correlated for longer than the run takes to sweep its temperature
+//! range at its fastest rate moves like the thermal effect, and one run cannot tell them apart.
+//! Since the correlation is modelled, the margin is not grown by it as the joint search's is.
 //!
 //! Every basis function is averaged over each bin's parts ([`crate::rows::SUB_BINS`]) as the
 //! target is averaged over the bin: a 120 s bin on a 3 °C/min ramp spans 6 °C, and a Gaussian of
 //! the bin's mean temperature is not the bin's mean of the Gaussian.
 //!
-//! The result competes with the pick of [`super::search`] (linear, cubic or joint Gaussians) on its
-//! log evidence in [`Search::choose`].
+//! The result competes with the pick of [`super::search`] (linear, cubic or joint Gaussians),
+//! refitted under the same AR(1) noise model, in `Search::choose`: it replaces the pick when its
+//! evidence is higher by the joint search's Occam margin (a structure change needs strong evidence).
 
 use super::search::Search;
 use super::{Fitted, to_target_units};
@@ -49,7 +61,7 @@ const REFITTED: usize = 4;
 /// α above which a Gaussian counts as switched off and is removed.
 const SWITCHED_OFF: f64 = 1e10;
 
-/// One candidate Gaussian over one feature or a pair.
+/// One candidate Gaussian over one feature.
 #[derive(Clone, Debug)]
 pub(super) struct Atom {
     /// The features, ascending.
@@ -67,7 +79,7 @@ pub(super) struct Additive {
     pub(super) fit: Fitted,
     /// α per column.
     alpha: Vec<f64>,
-    /// Linear columns (the features, and `T²`, `T³` with the cubic).
+    /// Linear columns (one per feature with the linear term, else none).
     nl: usize,
     /// The noise's AR(1) coefficient the evidence chose.
     pub(super) rho: f64,
