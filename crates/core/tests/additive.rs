@@ -159,7 +159,7 @@ fn host_additive() -> HostModel<'static> {
 fn masks_round_trip_through_both_decoders_as_format_3() {
     let m = host_additive();
     assert_eq!(m.version, MASKS_SINCE);
-    assert!(MASKS_SINCE <= FORMAT_VERSION);
+    const { assert!(MASKS_SINCE <= FORMAT_VERSION) };
     let mut buf = vec![0u8; 8192];
     let n = m.encode(&mut buf).unwrap();
     let bytes = &buf[..n];
@@ -207,12 +207,12 @@ fn the_plausibility_bound_leaves_out_features_outside_a_mask() {
     let mut state = 1u32;
     for _ in 0..2000 {
         let mut x = [0.0f32; HOST_FEATURES];
-        for k in 0..m.n_features() {
+        for (k, xk) in x.iter_mut().enumerate().take(m.n_features()) {
             state ^= state << 13;
             state ^= state >> 17;
             state ^= state << 5;
             let t = (state >> 8) as f32 / (1u32 << 24) as f32;
-            x[k] = lo.0[k] + t * (hi.0[k] - lo.0[k]);
+            *xk = lo.0[k] + t * (hi.0[k] - lo.0[k]);
         }
         let out = m.rbf.eval(&x);
         assert!(out.is_finite());
