@@ -214,20 +214,8 @@ impl core::fmt::Display for BlobError {
     }
 }
 
-/// CRC-32/ISO-HDLC (zip, PNG: reflected polynomial 0xEDB88320) of `bytes`: the blob's checksum,
-/// also used by the firmware's blob image, so every checksum in the project comes from one
-/// implementation. Bit by bit, without a 1 KiB table: a blob is checked once at load, so flash
-/// matters more than the microseconds.
-pub fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = (crc >> 1) ^ (0xEDB8_8320 & (crc & 1).wrapping_neg());
-        }
-    }
-    !crc
-}
+/// The blob's checksum: the core's one CRC-32 ([`crate::crc`]), here where the wire format names it.
+pub use crate::crc::crc32;
 
 impl From<RbfError> for BlobError {
     fn from(e: RbfError) -> Self {

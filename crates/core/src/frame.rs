@@ -19,7 +19,7 @@
 //! 8         8     timestamp u64: ticks of the sample timer since boot (missed periods included)
 //! 16        4     tick rate u32, Hz: the timestamp's unit (time = timestamp / tick rate seconds)
 //! 20        10·K  per channel: value f64 (°/h or µg), status word u16 (see [`status`])
-//! 20 + 10K  4     CRC-32 (the core's [`crc32`], ISO-HDLC) of bytes 2 .. 20 + 10K
+//! 20 + 10K  4     CRC-32 (the core's [`crc32`](crate::crc), ISO-HDLC) of bytes 2 .. 20 + 10K
 //! ```
 //!
 //! A six-channel frame is 84 bytes: at 200 Hz, 16.8 kB/s, a fifth of a 921,600-baud UART.
@@ -48,7 +48,7 @@
 //! NaN values are sent as the canonical quiet NaN `0x7FF8_0000_0000_0000` (the f64 widening of the
 //! f32 `0x7FC0_0000`), whatever NaN the arithmetic produced, so host and ARM frames are bit-identical.
 
-use crate::blob::crc32;
+use crate::crc::crc32;
 
 mod boot;
 pub use boot::{

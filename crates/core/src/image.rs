@@ -88,7 +88,7 @@ pub use table::{
 pub use v2::{Header, MAX_CHANNEL_ROWS, MAX_THERMOMETER_ROWS};
 pub use write::{Entry, ImageSpec, seal};
 
-use crate::blob::crc32;
+use crate::crc::crc32;
 
 /// The four bytes an image starts with.
 pub const MAGIC: [u8; 4] = *b"TCMI";

@@ -36,6 +36,7 @@ pub mod blob;
 pub mod bound;
 pub mod compensator;
 pub mod compile;
+pub mod crc;
 pub mod eval;
 #[cfg(feature = "alloc")]
 pub mod expr;

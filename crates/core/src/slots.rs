@@ -158,7 +158,7 @@ impl Header {
         for (dst, w) in out.chunks_exact_mut(4).zip(words) {
             dst.copy_from_slice(&w.to_le_bytes());
         }
-        let crc = crate::blob::crc32(out.get(..HEADER_CRC_SPAN).unwrap_or(&[]));
+        let crc = crate::crc::crc32(out.get(..HEADER_CRC_SPAN).unwrap_or(&[]));
         if let Some(dst) = out.get_mut(HEADER_CRC_SPAN..) {
             dst.copy_from_slice(&crc.to_le_bytes());
         }
@@ -172,7 +172,7 @@ impl Header {
             Some(u32::from_le_bytes(s))
         };
         if word(0)? != u32::from_le_bytes(MAGIC)
-            || crate::blob::crc32(bytes.get(..HEADER_CRC_SPAN)?) != word(4)?
+            || crate::crc::crc32(bytes.get(..HEADER_CRC_SPAN)?) != word(4)?
         {
             return None;
         }
@@ -185,37 +185,8 @@ impl Header {
     }
 }
 
-/// CRC-32 fed in pieces, equal to [`crate::blob::crc32`] over their concatenation.
-#[derive(Clone, Copy, Debug)]
-pub struct Crc32(u32);
-
-impl Default for Crc32 {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl Crc32 {
-    /// Nothing fed yet.
-    pub const fn new() -> Self {
-        Self(!0)
-    }
-
-    /// Feeds `bytes`.
-    pub fn update(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 ^= u32::from(b);
-            for _ in 0..8 {
-                self.0 = (self.0 >> 1) ^ (0xEDB8_8320 & (self.0 & 1).wrapping_neg());
-            }
-        }
-    }
-
-    /// The CRC of everything fed.
-    pub const fn finish(&self) -> u32 {
-        !self.0
-    }
-}
+/// The slots' incremental checksum: the core's one CRC-32 ([`crate::crc`]).
+pub use crate::crc::Crc32;
 
 /// CRC-32 of `len` bytes of flash from `offset`, read [`CHUNK`] bytes at a time.
 pub fn flash_crc<F: ReadNorFlash>(flash: &mut F, offset: u32, len: u32) -> Result<u32, F::Error> {

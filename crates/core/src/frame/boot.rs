@@ -49,7 +49,7 @@
 //! after a refused `tcomp flash` sees why, and that it still runs its old image.
 
 use super::{MAX_CHANNELS, SYNC, le_u32, le_u64};
-use crate::blob::crc32;
+use crate::crc::crc32;
 
 /// The version byte of a boot report (the data frames' is 1).
 pub const BOOT_VERSION: u8 = 0x83;

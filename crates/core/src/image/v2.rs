@@ -8,7 +8,7 @@ use super::table::{
     sensor_from_code,
 };
 use super::{ImageError, MAX_ENTRIES, u16_at, u32_at};
-use crate::blob::crc32;
+use crate::crc::crc32;
 
 /// Bytes of the version-2 header.
 pub const HEADER_LEN: usize = 64;

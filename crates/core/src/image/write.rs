@@ -11,7 +11,7 @@ use super::v2::{
     TOOL_LEN,
 };
 use super::{ALIGN, Image, ImageError, MAGIC, MAX_ENTRIES, VERSION_2, put};
-use crate::blob::crc32;
+use crate::crc::crc32;
 
 /// One blob of the image, for the channel `channel` of the table.
 #[derive(Clone, Copy, Debug)]

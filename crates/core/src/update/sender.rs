@@ -14,7 +14,7 @@
 //! active slot is untouched either way).
 
 use super::wire::{Kind, MAX_CHUNK, MAX_FRAME, MAX_SERIAL, Packet, Reason};
-use crate::blob::crc32;
+use crate::crc::crc32;
 use crate::slots::SlotId;
 
 /// Timeouts in a row on one request before the sender gives up. With the reply timeout derived

@@ -23,7 +23,7 @@
 //! both the unit's output frames and its update replies finds every reply (each output frame is
 //! garbage to it, and the reverse), and a unit recovers from a corrupt request at the next sync.
 
-use crate::slots::Crc32;
+use crate::crc::Crc32;
 
 /// The two bytes every update frame starts with.
 pub const SYNC: [u8; 2] = [0xEB, 0x91];
