@@ -1,0 +1,184 @@
+//! The rate of "missing effect" verdicts on runs where nothing is missing: the model is given the
+//! truth's own features, so any effect the diagnosis names is invented. Three negative controls,
+//! each over many seeds (simulated training and verification runs of the presets):
+//!
+//! - `plain`: the QMA and RLG presets with their true features;
+//! - `distractors`: the IFOG preset with two auxiliary columns that follow the temperature (a board
+//!   thermometer lagging the coil by 15 min, a fan duty proportional to it) and act on nothing;
+//! - `drift`: the QMA preset with a slow non-thermal drift added to the output (a random walk,
+//!   Gauss–Markov with a 3-hour correlation time, 3× the noise floor) that no input explains.
+//!
+//! `cargo run --release -p tcomp-discover --example false_discoveries -- [SEEDS]` (default 20)
+//! prints each run's verdict and the rate per control (the verdicts are "missing effect" or "none":
+//! the diagnosis has no "cannot tell" yet).
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use tcomp_demo::{Simulated, simulated};
+use tcomp_discover::{DiagnoseOptions, Verdict, diagnose};
+use tcomp_sim::{EffectKind, SensorKind, presets};
+use tcomp_train::{Dataset, FitOptions};
+
+fn signals(sim: &Simulated) -> Vec<String> {
+    sim.train_truth
+        .true_features
+        .signals
+        .iter()
+        .map(|(k, v)| format!("{k} = {v}"))
+        .collect()
+}
+
+/// `data` with `f(data)` columns appended.
+fn with_columns(data: &Dataset, add: &[(&str, Vec<f64>)]) -> Dataset {
+    let mut names = data.names().to_vec();
+    let mut cols: Vec<Vec<f64>> = names
+        .iter()
+        .map(|n| data.column(n).unwrap().to_vec())
+        .collect();
+    for (n, c) in add {
+        names.push((*n).to_string());
+        cols.push(c.clone());
+    }
+    Dataset::from_columns(data.file(), names, cols)
+}
+
+/// A first-order lag of `x` with time constant `tau` samples.
+fn lag(x: &[f64], tau: f64) -> Vec<f64> {
+    let a = (-1.0 / tau).exp();
+    let mut l = x.first().copied().unwrap_or(0.0);
+    x.iter()
+        .map(|v| {
+            l = a * l + (1.0 - a) * v;
+            l
+        })
+        .collect()
+}
+
+/// A Gauss–Markov drift of correlation time `tau` samples and std `sd`, from a seeded xorshift.
+fn drift(n: usize, tau: f64, sd: f64, seed: u64) -> Vec<f64> {
+    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let a = (-1.0 / tau).exp();
+    let q = sd * (1.0 - a * a).sqrt();
+    let mut v = 0.0;
+    (0..n)
+        .map(|_| {
+            let mut u = 0.0;
+            for _ in 0..12 {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                u += (s >> 11) as f64 / (1u64 << 53) as f64;
+            }
+            v = a * v + q * (u - 6.0);
+            v
+        })
+        .collect()
+}
+
+/// Diagnoses the true-feature model of `sim`; returns the verdict and its text.
+fn verdict(sim: &Simulated) -> (Verdict, String) {
+    let truth = &sim.train_truth;
+    let feats: Vec<&str> = truth
+        .true_features
+        .features
+        .iter()
+        .map(String::as_str)
+        .collect();
+    let mut o = FitOptions::new(&truth.columns.target, &feats);
+    o.spec.signals = signals(sim);
+    o.reference = Some(truth.columns.reference.clone());
+    let fitted = tcomp_train::fit(&sim.train, &o).unwrap();
+    let bytes = fitted.model.to_bytes().unwrap();
+    let model = tcomp_train::blob_io::decode("m.tcm".as_ref(), &bytes).unwrap();
+    let a = diagnose(
+        &model,
+        &sim.train,
+        Some(&sim.verify),
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    (a.diagnosis.verdict, a.diagnosis.verdict_text)
+}
+
+fn main() {
+    let seeds: u64 = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20);
+    let mut rates = Vec::new();
+    for control in ["plain", "distractors", "drift"] {
+        let mut missing = 0;
+        for s in 0..seeds {
+            let seed = 500 + s;
+            let sim = match control {
+                "plain" => {
+                    let name = if s % 2 == 0 { "qma" } else { "rlg" };
+                    simulated(&presets::preset(name).unwrap().with_seed(seed)).unwrap()
+                }
+                "distractors" => {
+                    let p = presets::with_effects(
+                        SensorKind::Ifog,
+                        &[EffectKind::Poly, EffectKind::Rate],
+                    )
+                    .unwrap()
+                    .with_seed(seed);
+                    let mut sim = simulated(&p).unwrap();
+                    for (d, k) in [(&mut sim.train, 1.0), (&mut sim.verify, 2.0)] {
+                        let coil = d.column("t_coil_c").unwrap().to_vec();
+                        let board: Vec<f64> = lag(&coil, 900.0)
+                            .iter()
+                            .enumerate()
+                            .map(|(i, v)| 0.9 * v + 3.0 + 0.02 * (i as f64 * 0.37 + k).sin())
+                            .collect();
+                        let fan: Vec<f64> = coil.iter().map(|v| 0.02 * v + 0.1).collect();
+                        *d = with_columns(d, &[("t_board_c", board), ("fan_duty", fan)]);
+                    }
+                    sim
+                }
+                _ => {
+                    let mut sim =
+                        simulated(&presets::preset("qma").unwrap().with_seed(seed)).unwrap();
+                    let floor = sim.verify_truth.noise.std_100s;
+                    let target = sim.train_truth.columns.target.clone();
+                    for (d, k) in [(&mut sim.train, 1u64), (&mut sim.verify, 2u64)] {
+                        let n = d.len();
+                        let w = drift(n, 10_800.0, 3.0 * floor, seed * 7 + k);
+                        let names = d.names().to_vec();
+                        let cols: Vec<Vec<f64>> = names
+                            .iter()
+                            .map(|c| {
+                                let v = d.column(c).unwrap();
+                                if *c == target {
+                                    v.iter().zip(&w).map(|(a, b)| a + b).collect()
+                                } else {
+                                    v.to_vec()
+                                }
+                            })
+                            .collect();
+                        *d = Dataset::from_columns(d.file(), names, cols);
+                    }
+                    sim
+                }
+            };
+            let (v, text) = verdict(&sim);
+            match v {
+                Verdict::MissingEffect => missing += 1,
+                Verdict::None => {}
+            }
+            println!("{control:<12} seed {seed}: {v:?} — {text}");
+        }
+        let rate = missing as f64 / seeds as f64;
+        println!(
+            "{control:<12} missing-effect verdicts {missing}/{seeds} ({:.0} %)",
+            100.0 * rate
+        );
+        rates.push((control, missing));
+    }
+    println!(
+        "FALSE-DISCOVERIES seeds={seeds} {}",
+        rates
+            .iter()
+            .map(|(c, m)| format!("{c}={m}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+}
