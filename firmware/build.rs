@@ -48,15 +48,14 @@ fn write_wiring(dir: &Path, out: &Path) {
             rows.len()
         );
         for row in &rows {
-            let (index, scale) = match (row.source, row.sensor) {
-                (Source::Counter(n), SensorKind::Qma | SensorKind::MemsAccel) => {
-                    (n, format!("ChannelScale::qma_ug_per_hz({:?})", row.scale))
+            // By what the channel measures, whatever its source (a counter's pulses or a sampled
+            // register's LSBs): accelerometers in µg·s per count, gyros in arcsec per count.
+            let (Source::Counter(index) | Source::Sample(index)) = row.source;
+            let scale = match row.sensor {
+                SensorKind::Qma | SensorKind::MemsAccel => {
+                    format!("ChannelScale::accel_ug_s_per_count({:?})", row.scale)
                 }
-                // A gyro's counter, or a sample source (`per_pulse` is then its unit per LSB).
-                (Source::Counter(n) | Source::Sample(n), _) => (
-                    n,
-                    format!("ChannelScale::rlg_arcsec_per_pulse({:?})", row.scale),
-                ),
+                _ => format!("ChannelScale::gyro_arcsec_per_count({:?})", row.scale),
             };
             let inputs: Vec<String> = row
                 .inputs()

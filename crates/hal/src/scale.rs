@@ -42,12 +42,27 @@ pub struct ChannelScale {
 }
 
 impl ChannelScale {
-    /// A ring laser gyro channel with `arcsec_per_pulse` (output in °/h).
-    pub const fn rlg_arcsec_per_pulse(arcsec_per_pulse: f32) -> Self {
+    /// Any gyro channel (output in °/h) whose count — a pulse of a counter, or one LSB of a
+    /// sampled rate register integrated over its period — stands for `arcsec` of rotation.
+    pub const fn gyro_arcsec_per_count(arcsec: f32) -> Self {
         Self {
-            per_pulse: arcsec_per_pulse,
+            per_pulse: arcsec,
             unit: Unit::DegPerHour,
         }
+    }
+
+    /// Any accelerometer channel (output in µg) whose count stands for `ug_s` µg·s of velocity
+    /// change (a pulse of an I/F converter, or one LSB of a sampled register over its period).
+    pub const fn accel_ug_s_per_count(ug_s: f32) -> Self {
+        Self {
+            per_pulse: ug_s,
+            unit: Unit::MicroG,
+        }
+    }
+
+    /// A ring laser gyro channel with `arcsec_per_pulse` (output in °/h).
+    pub const fn rlg_arcsec_per_pulse(arcsec_per_pulse: f32) -> Self {
+        Self::gyro_arcsec_per_count(arcsec_per_pulse)
     }
 
     /// A ring laser gyro channel from its geometry: enclosed area (m²), perimeter (m) and laser
@@ -60,10 +75,7 @@ impl ChannelScale {
     /// A quartz accelerometer channel behind an I/F converter, with `ug_per_hz` µg per pulse/s
     /// (output in µg).
     pub const fn qma_ug_per_hz(ug_per_hz: f32) -> Self {
-        Self {
-            per_pulse: ug_per_hz,
-            unit: Unit::MicroG,
-        }
+        Self::accel_ug_s_per_count(ug_per_hz)
     }
 
     /// A quartz accelerometer channel from its current scale factor `k1` (A/g) and the converter's

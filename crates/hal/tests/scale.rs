@@ -52,3 +52,21 @@ fn bad_interval_is_out_of_range() {
         assert_eq!(s.rate(1, dt), Err(ErrorKind::OutOfRange), "dt = {dt}");
     }
 }
+
+/// The general constructors are the device ones' numbers with the unit of what is measured.
+#[test]
+fn general_constructors_name_the_quantity_not_the_device() {
+    assert_eq!(
+        ChannelScale::gyro_arcsec_per_count(1.5),
+        ChannelScale::rlg_arcsec_per_pulse(1.5)
+    );
+    assert_eq!(
+        ChannelScale::accel_ug_s_per_count(50.0),
+        ChannelScale::qma_ug_per_hz(50.0)
+    );
+    assert_eq!(ChannelScale::accel_ug_s_per_count(1.0).unit(), Unit::MicroG);
+    assert_eq!(
+        ChannelScale::gyro_arcsec_per_count(1.0).unit(),
+        Unit::DegPerHour
+    );
+}
