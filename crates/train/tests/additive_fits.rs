@@ -10,7 +10,8 @@
 //! The added terms are computed here from the recorded columns with the core's own filters in f64,
 //! at 40× the verification run's noise floor, so a model that misses them cannot hide.
 //!
-//! `cargo test --release -p tcomp-train --test additive_fits -- --nocapture` prints the table.
+//! `cargo test --release -p tcomp-train --test additive_fits -- --nocapture` prints the table
+//! (`SHOW=1`: every structure each fit compared; `SEEDS=N`, `SEED_BASE=K`: other seeds).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 use tcomp_core::eval::Lag;

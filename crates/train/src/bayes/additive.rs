@@ -526,13 +526,7 @@ impl Search<'_> {
     /// An additive model in words over the feature names.
     pub(super) fn describe(&self, a: &Additive) -> String {
         let d = a.nl;
-        let name = |k: usize| {
-            self.opts
-                .names
-                .get(k)
-                .cloned()
-                .unwrap_or_else(|| format!("f{k}"))
-        };
+        let name = |k: usize| self.feature_name(k);
         let mut groups: Vec<(Vec<usize>, Vec<f64>)> = Vec::new();
         for atom in &a.atoms {
             match groups.iter_mut().find(|(f, _)| *f == atom.feats) {

@@ -225,6 +225,15 @@ impl<'o> Search<'o> {
         }
     }
 
+    /// Feature `k`'s name for the report (`f0`, `f1`… when none were given).
+    pub(super) fn feature_name(&self, k: usize) -> String {
+        self.opts
+            .names
+            .get(k)
+            .cloned()
+            .unwrap_or_else(|| format!("f{k}"))
+    }
+
     /// How feature `k` may enter the Gaussians.
     pub(super) fn pin(&self, k: usize) -> Pin {
         self.opts.pins.get(k).copied().unwrap_or_default()
@@ -533,13 +542,7 @@ impl<'o> Search<'o> {
         if c.m == 0 {
             return "linear term alone".into();
         }
-        let name = |k: usize| {
-            self.opts
-                .names
-                .get(k)
-                .cloned()
-                .unwrap_or_else(|| format!("f{k}"))
-        };
+        let name = |k: usize| self.feature_name(k);
         let on: Vec<String> = (0..self.d())
             .filter(|&k| c.ls.get(k).is_some_and(|l| *l < 64.0))
             .map(name)
