@@ -27,6 +27,7 @@
 //! println!("{}", fitted.summary.train.residual_std);
 //! ```
 
+pub mod ar1;
 pub mod autopilot;
 pub mod bayes;
 pub mod binning;

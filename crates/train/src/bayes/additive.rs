@@ -28,7 +28,7 @@
 //! bins that share one offset, and evidence that treats them as independent credits a narrow
 //! Gaussian at the hold's temperature with explaining all 30. Every model here is judged under
 //! AR(1) noise: targets and basis functions whitened (Prais–Winsten), with `ρ` a hyperparameter
-//! like α and β — the one of [`RHO_GRID`] with the highest evidence, `ln p(y) = ln p(y′) +
+//! like α and β — the one of [`crate::ar1::RHO_GRID`] with the highest evidence, `ln p(y) = ln p(y′) +
 //! ½ ln(1 − ρ²)` (the whitening's Jacobian), for each model. `ρ` is bounded by the run itself
 //! ([`Search::rho_max`]): noise correlated for longer than the run takes to sweep its temperature
 //! range at its fastest rate moves like the thermal effect, and one run cannot tell them apart.
@@ -44,7 +44,7 @@
 
 use super::search::Search;
 use super::{Fitted, to_target_units};
-use crate::evidence::{Settings, fit_with};
+use crate::ar1::{fit_best_rho, whiten, whitened};
 use crate::rbf64::Rbf64;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -89,72 +89,6 @@ impl Additive {
     fn ev(&self) -> f64 {
         self.fit.ev.log_evidence
     }
-}
-
-/// The AR(1) coefficients of the noise compared by the evidence (bins in time order).
-pub(super) const RHO_GRID: [f64; 8] = [0.0, 0.3, 0.5, 0.65, 0.8, 0.9, 0.95, 0.98];
-
-/// Prais–Winsten whitening of one series under AR(1) coefficient `rho`, in place:
-/// `v'ₜ = vₜ − ρ·vₜ₋₁`, the first scaled by `√(1 − ρ²)`.
-fn whiten(v: &mut [f64], rho: f64) {
-    if rho == 0.0 {
-        return;
-    }
-    for t in (1..v.len()).rev() {
-        v[t] -= rho * v[t - 1];
-    }
-    if let Some(f) = v.first_mut() {
-        *f *= (1.0 - rho * rho).sqrt();
-    }
-}
-
-fn whitened(m: &DMatrix<f64>, rho: f64) -> DMatrix<f64> {
-    let mut m = m.clone();
-    let n = m.nrows().max(1);
-    for col in m.as_mut_slice().chunks_exact_mut(n) {
-        whiten(col, rho);
-    }
-    m
-}
-
-/// The evidence fit of `y ≈ Φw` under AR(1) noise of coefficient `rho` (with `start`, α per
-/// group and β), and its log evidence of the data as given (the whitening's Jacobian
-/// `½ ln(1 − ρ²)` included).
-fn fit_ar1(
-    phi: &DMatrix<f64>,
-    y: &DVector<f64>,
-    groups: &[usize],
-    start: (&[f64], f64),
-    rho: f64,
-) -> Option<(crate::evidence::GroupFit, f64)> {
-    let p = whitened(phi, rho);
-    let mut yw = y.clone();
-    whiten(yw.as_mut_slice(), rho);
-    let f = fit_with(&p, &yw, groups, Some(start), &Settings::TRAINER)?;
-    let ev = f.log_evidence + 0.5 * (1.0 - rho * rho).ln();
-    Some((f, ev))
-}
-
-/// [`fit_ar1`] at every `ρ` of [`RHO_GRID`] up to `rho_max`: the noise's serial correlation is a
-/// hyperparameter like α and β, chosen by the evidence for each model; returns the best and its
-/// `ρ`.
-fn fit_best_rho(
-    phi: &DMatrix<f64>,
-    y: &DVector<f64>,
-    groups: &[usize],
-    start: (&[f64], f64),
-    rho_max: f64,
-) -> Option<(crate::evidence::GroupFit, f64, f64)> {
-    RHO_GRID
-        .iter()
-        .copied()
-        .filter(|r| *r <= rho_max)
-        .collect::<Vec<f64>>()
-        .par_iter()
-        .filter_map(|&r| fit_ar1(phi, y, groups, start, r).map(|(f, e)| (f, e, r)))
-        .collect::<Vec<_>>()
-        .into_iter()
-        .max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
 impl Search<'_> {
