@@ -184,8 +184,8 @@ def fit(data: Data, *, source: Optional[str] = None, **options: Any) -> Model:
 
 @dataclass(frozen=True)
 class Diagnosis:
-    """Where a model fails and which effect is missing: ``verdict`` (``"missing_effect"`` or
-    ``"none"``), its sentence, the ``candidates`` table (a DataFrame, best first; records
+    """Where a model fails and which effect is missing: ``verdict`` (``"missing_effect"``,
+    ``"cannot_tell"`` or ``"none"``), its sentence, the ``candidates`` table (a DataFrame, best first; records
     without pandas) and the whole body of ``tcomp diagnose --json`` in ``raw``."""
 
     verdict: str

@@ -401,3 +401,78 @@ pub fn confirm(
     }
     Ok(base)
 }
+
+/// The trainer's refits of `c`'s placebos (the second stage of [`crate::placebo`]): `c`'s feature
+/// columns computed over the training run, shifted circularly by the first stage's shifts (bins
+/// converted to rows), added to the run as columns and refitted beside the model's features on
+/// the same blocks as `c`'s confirmation; each placebo's held-out improvement. None when `c` was
+/// not confirmed or tested.
+pub(crate) fn refit_placebos(
+    info: &ModelInfo,
+    roles: &Roles,
+    runs: Runs<'_>,
+    opts: &ConfirmOptions,
+    gap_s: Option<f64>,
+    c: &Scored,
+) -> Option<crate::placebo::RefitPlacebos> {
+    let k = c.confirmation.as_ref()?;
+    let first = c.placebo.as_ref()?;
+    let data = runs.data;
+    let spec = tcomp_train::features::FeatureSpec {
+        signals: info.spec.signals.clone(),
+        features: c.expressions.clone(),
+    };
+    let program = spec.program().ok()?;
+    let time = data.time(&roles.time).ok()?;
+    let starts = tcomp_train::dataset::segments(time, gap_s);
+    let rows = tcomp_train::features::compute(&program, data, time, &starts).ok()?;
+    let n = rows.len();
+    if n == 0 {
+        return None;
+    }
+    let count = first.placebos.len().max(1);
+    let nb = crate::placebo::bins_of(first).max(1);
+    let mut names = data.names().to_vec();
+    let mut cols: Vec<Vec<f64>> = names
+        .iter()
+        .map(|m| data.column(m).map(<[f64]>::to_vec).unwrap_or_default())
+        .collect();
+    let mut sets = Vec::with_capacity(count);
+    for (p, &s) in first.shifts_bins.iter().enumerate() {
+        let shift = s * n / nb;
+        let mut set = Vec::new();
+        for j in 0..c.expressions.len() {
+            let name = format!("placebo_{p}_{j}");
+            cols.push(
+                (0..n)
+                    .map(|i| {
+                        rows.get((i + n - shift % n) % n)
+                            .and_then(|r| r.get(j))
+                            .map_or(f64::NAN, |v| f64::from(*v))
+                    })
+                    .collect(),
+            );
+            names.push(name.clone());
+            set.push(name);
+        }
+        sets.push(set);
+    }
+    let extended = Dataset::from_columns(data.file(), names, cols);
+    let blocks = training_blocks(roles, &extended, opts, runs.run).ok()?;
+    let (splits, _) = block_splits(&blocks);
+    let refits = Refits::new(info, roles, &extended, gap_s);
+    let before = k.residual_std_before;
+    let placebos_pct: Vec<f64> = sets
+        .par_iter()
+        .map(|set| {
+            let mut features = info.spec.features.clone();
+            features.extend(set.iter().cloned());
+            heldout_std(&refits, &splits, &features)
+                .map_or(f64::NEG_INFINITY, |f| 100.0 * (1.0 - f.pooled / before))
+        })
+        .collect();
+    Some(crate::placebo::RefitPlacebos {
+        improvement_pct: k.improvement_pct,
+        placebos_pct,
+    })
+}

@@ -6,8 +6,10 @@
 //! [`candidates`] (which effects could be missing, with physical names and ready expressions),
 //! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual, against
 //! the base model `base` prepares once from the columns and transform of `design`),
-//! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`verdict`] (the stated
-//! criterion). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
+//! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`confirm`] (the
+//! leading candidates refitted by the trainer), [`placebo`] (each against its own columns shifted
+//! in time, under AR(1) noise), [`verdict`] (the stated criterion: a missing effect, "cannot tell"
+//! or none). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
 //! in the tool (`host-tools/src/render/`, `host-tools/src/demo/`): this crate analyses, it does not
 //! print, and it needs no simulator.
 //!
@@ -28,6 +30,7 @@ mod design;
 pub mod error;
 pub mod families;
 pub mod param;
+pub mod placebo;
 pub mod program;
 pub mod rounds;
 pub mod score;
@@ -125,7 +128,7 @@ pub struct ModelSummary {
 /// Everything `tcomp diagnose` reports.
 #[derive(Clone, Debug, Serialize)]
 pub struct Diagnosis {
-    /// "missing_effect" or "none".
+    /// "missing_effect", "cannot_tell" or "none".
     pub verdict: Verdict,
     /// The verdict in one sentence.
     pub verdict_text: String,
@@ -242,7 +245,29 @@ pub fn diagnose(
         run: Some(&run),
     };
     let refit_before = confirm::confirm(&info, &roles, runs, &mut cands, &opts.confirm, &prepared)?;
+    placebo::calibrate(&prepared, &mut cands, opts.criterion.placebos);
     opts.criterion.apply(refit_before.noise_floor, &mut cands);
+    // The placebos' second stage: the trainer's refits, for the leading candidates that fail only
+    // the first stage and have no searched parameter (see `placebo::RefitPlacebos`).
+    let retest: Vec<usize> = (0..cands.len())
+        .filter(|&i| {
+            cands
+                .get(i)
+                .is_some_and(|c| c.search.is_none() && verdict::fails_only_placebos(c))
+        })
+        .take(2)
+        .collect();
+    if !retest.is_empty() {
+        for i in retest {
+            let Some(c) = cands.get(i) else { continue };
+            let refit =
+                confirm::refit_placebos(&info, &roles, runs, &opts.confirm, prepared.gap_s, c);
+            if let Some(p) = cands.get_mut(i).and_then(|c| c.placebo.as_mut()) {
+                p.refit = refit;
+            }
+        }
+        opts.criterion.apply(refit_before.noise_floor, &mut cands);
+    }
     let (verdict, verdict_text) = verdict::decide(&cands);
     let diagnosis = Diagnosis {
         verdict,

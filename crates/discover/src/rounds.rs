@@ -98,6 +98,13 @@ pub fn diagnose_rounds(
         let top = d.candidates.first();
         let c = match (d.verdict, top) {
             (Verdict::MissingEffect, Some(c)) => c,
+            (Verdict::CannotTell, _) => {
+                break format!(
+                    "round {}: the run cannot tell its candidates apart (the verdict names them \
+                     and the run that would separate them)",
+                    analyses.len()
+                );
+            }
             _ => {
                 break format!(
                     "round {}: nothing passes the criterion{}",

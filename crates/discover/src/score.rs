@@ -149,6 +149,8 @@ pub struct Scored {
     pub estimate: Option<crate::param::Estimate>,
     /// The scoring grid's best parameter, when the estimate moved away from it.
     pub parameter_scored: Option<f64>,
+    /// The candidate against its placebos ([`crate::placebo`]), when it was refitted.
+    pub placebo: Option<crate::placebo::Placebo>,
     /// Whether it clears the criterion (set by the verdict).
     pub passes: bool,
     /// Why it does not (set by the verdict).
@@ -294,6 +296,7 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             search: families.get(f).and_then(|x| x.search.clone()),
             estimate: None,
             parameter_scored: None,
+            placebo: None,
             passes: false,
             fails: Vec::new(),
         });

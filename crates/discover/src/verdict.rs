@@ -1,6 +1,7 @@
-//! The verdict: a named missing effect, or "no significant missing effect", by a stated criterion.
+//! The verdict: a named missing effect, "cannot tell" with the candidates named, or "no significant
+//! missing effect", by a stated criterion.
 //!
-//! Why a criterion with three legs: a tool that always finds something is worse than none. Each leg
+//! Why a criterion with four legs: a tool that always finds something is worse than none. Each leg
 //! guards against a different way of fooling oneself.
 //! 1. **Evidence:** Δ log evidence ≥ `min_delta_log_evidence` (default 5, "strong" on Jeffreys'
 //!    scale) on binned training data — the candidate is worth its extra parameter there. Or, when
@@ -15,6 +16,16 @@
 //!    `min_removed_vs_floor` (default 0.5) times the noise floor estimated from the held-out
 //!    residual — an effect smaller than that cannot be told from noise, and a model that already
 //!    holds the physics sits at the floor with nothing left to remove.
+//!
+//! 4. **Above its placebos:** the candidate's Δ log evidence under AR(1) noise beats every placebo
+//!    of every candidate tested — the same columns shifted in time, searched over the family's
+//!    parameter as the candidate was ([`crate::placebo`]) — so a slow drift that any slow column
+//!    would explain is not named, at a false-alarm rate of 1 / (placebos + 1) = 5 %.
+//!
+//! "Cannot tell" is said, naming the candidates and the kind of run that would separate them
+//! ([`separating_run`]), when two candidates clear every leg and their refits' log evidence differs
+//! by less than [`INDISTINCT_NATS`], or when the best candidate clears every leg but the placebos
+//! (the run cannot tell it from a drift). It is never a missing effect: `--rounds` stops there.
 //!
 //! The held-out figures of legs 1 (its held-out path), 2 and 3 are those of a real refit by the
 //! trainer ([`crate::confirm`]): only the few candidates so refitted can be named, so a verdict never
@@ -45,6 +56,8 @@ pub struct Criterion {
     pub strong_improvement_pct: f64,
     /// Minimum held-out error removed, as a multiple of the noise floor estimate.
     pub min_removed_vs_floor: f64,
+    /// Placebos each refitted candidate must beat ([`crate::placebo`]); 0 turns the leg off.
+    pub placebos: usize,
 }
 
 impl Default for Criterion {
@@ -54,6 +67,7 @@ impl Default for Criterion {
             min_improvement_pct: 5.0,
             strong_improvement_pct: 20.0,
             min_removed_vs_floor: 0.5,
+            placebos: crate::placebo::PLACEBOS,
         }
     }
 }
@@ -69,6 +83,18 @@ const FLOOR: Bound = Bound {
     why: "a multiple of the noise floor",
 };
 
+/// Placebos per candidate: 0 turns the leg off; past 999 the test costs more than the diagnosis
+/// and buys a false-alarm rate below 0.1 % that no chamber run's drift model supports.
+pub const PLACEBO_COUNT: Bound = Bound {
+    flag: "placebos",
+    key: "",
+    min: 0.0,
+    min_exclusive: false,
+    max: 999.0,
+    unit: "",
+    why: "placebos each candidate must beat",
+};
+
 impl Criterion {
     /// Checks every threshold against its valid range.
     pub fn validate(&self) -> Result<(), TrainError> {
@@ -80,6 +106,7 @@ impl Criterion {
         }
         .check(self.strong_improvement_pct)?;
         FLOOR.check(self.min_removed_vs_floor)?;
+        PLACEBO_COUNT.check_count(self.placebos, "")?;
         Ok(())
     }
 
@@ -91,11 +118,22 @@ impl Criterion {
              and (3) the held-out error it removes, √(before² − after²), is ≥ {}× the noise floor \
              estimated from the held-out residual — held out meaning contiguous blocks of the \
              training run, each predicted by a fit on the rest (a verification run is only \
-             reported: it never chooses)",
+             reported: it never chooses){}",
             self.min_delta_log_evidence,
             self.strong_improvement_pct,
             self.min_improvement_pct,
-            self.min_removed_vs_floor
+            self.min_removed_vs_floor,
+            if self.placebos > 0 {
+                format!(
+                    "; and (4) its Δ log evidence under AR(1) noise beats that of every one of {} \
+                     placebos of every candidate tested (its columns shifted in time: a \
+                     false-alarm rate of {:.0} % when nothing is missing)",
+                    self.placebos,
+                    100.0 / (self.placebos + 1) as f64
+                )
+            } else {
+                String::new()
+            }
         )
     }
 
@@ -136,6 +174,24 @@ impl Criterion {
             if let Some(why) = &c.unconfirmed {
                 fails.push(format!("unconfirmed: {why}"));
             }
+            if self.placebos > 0 {
+                match &c.placebo {
+                    Some(p) if !p.passes() => fails.push(format!(
+                        "explains no more than its placebos: Δ log evidence under AR(1) noise \
+                         (ρ = {}) {:.1} ≤ {:.1}, the best of {} placebos (its columns shifted \
+                         in time)",
+                        p.rho,
+                        p.statistic,
+                        p.threshold,
+                        p.placebos.len()
+                    )),
+                    Some(_) => {}
+                    None if c.unconfirmed.is_none() => {
+                        fails.push("not tested against placebos".into());
+                    }
+                    None => {}
+                }
+            }
             c.passes = fails.is_empty();
             c.fails = fails;
         }
@@ -154,15 +210,23 @@ impl Criterion {
     }
 }
 
-/// "missing_effect" or "none".
+/// "missing_effect", "cannot_tell" or "none".
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
-    /// A candidate cleared the criterion.
+    /// A candidate cleared the criterion, and no other it cannot be told from.
     MissingEffect,
+    /// The run cannot decide: two candidates clear the criterion with evidence that cannot tell
+    /// them apart, or the best candidate clears every leg but the placebos (it explains the run
+    /// no better than its own columns shifted in time, so a slow drift would do as well).
+    CannotTell,
     /// None did.
     None,
 }
+
+/// Log evidence (nats) below which two hypotheses cannot be told apart: "not worth more than a
+/// bare mention" on Kass and Raftery's scale (`2 ln B < 2`, odds under e : 1).
+pub const INDISTINCT_NATS: f64 = 1.0;
 
 /// `--feature 'e'` for each expression.
 fn flags(exprs: &[String]) -> String {
@@ -228,8 +292,162 @@ fn heldout_text(c: &Scored) -> String {
     t
 }
 
+/// The function names an expression calls (`lag`, `rate`, …).
+fn operators(exprs: &[String]) -> Vec<String> {
+    let mut out = Vec::new();
+    for e in exprs {
+        let b = e.as_bytes();
+        let mut start = None;
+        for (i, &ch) in b.iter().enumerate() {
+            let ident = ch.is_ascii_alphanumeric() || ch == b'_';
+            match (ident, start) {
+                (true, None) => start = Some(i),
+                (false, Some(s0)) => {
+                    if ch == b'(' {
+                        out.push(e[s0..i].to_string());
+                    }
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// The names an expression reads that are not function calls (columns, signals).
+fn inputs(exprs: &[String]) -> Vec<String> {
+    let ops = operators(exprs);
+    let mut out: Vec<String> = exprs
+        .iter()
+        .flat_map(|e| {
+            e.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                .filter(|t| !t.is_empty() && !t.starts_with(|c: char| c.is_ascii_digit()))
+                .map(str::to_string)
+                .collect::<Vec<_>>()
+        })
+        .filter(|t| !ops.contains(t))
+        .collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// What kind of run would tell `a` from `b`, from what their expressions read and do: inputs only
+/// one of them reads must vary on their own; dynamics (a lag, a rate, a relay) scale differently
+/// with the ramp rate; a warm-up repeats only with a power-on.
+pub fn separating_run(a: &Scored, b: &Scored) -> String {
+    let (ia, ib) = (inputs(&a.expressions), inputs(&b.expressions));
+    let only = |x: &[String], y: &[String]| -> Vec<String> {
+        x.iter().filter(|v| !y.contains(v)).cloned().collect()
+    };
+    let (oa, ob) = (only(&ia, &ib), only(&ib, &ia));
+    let mut ways = Vec::new();
+    if !oa.is_empty() || !ob.is_empty() {
+        let mut all = oa;
+        all.extend(ob);
+        ways.push(format!(
+            "a run in which {} vary apart from the temperature and from each other",
+            all.join(", ")
+        ));
+    }
+    let mut ops = operators(&a.expressions);
+    ops.extend(operators(&b.expressions));
+    if ops.iter().any(|o| o == "lag" || o == "rate" || o == "hyst") {
+        ways.push(
+            "a run with ramps at a second rate in both directions and a second cooling ramp (a \
+             lag, a rate and a heating/cooling relay each scale differently with the ramp rate)"
+                .to_string(),
+        );
+    }
+    if ops.iter().any(|o| o == "warmup") {
+        ways.push("a run with a second power-on at another temperature".to_string());
+    }
+    if ways.is_empty() {
+        ways.push(
+            "a run on another temperature profile (other hold temperatures, other ramp rates)"
+                .to_string(),
+        );
+    }
+    format!("{} would separate them", ways.join("; or "))
+}
+
+/// The second candidate that clears the criterion as a missing effect and whose real refit's
+/// evidence is within [`INDISTINCT_NATS`] of the first's.
+fn rival(cands: &[Scored]) -> Option<&Scored> {
+    let first = cands.first()?;
+    let ev = |c: &Scored| c.confirmation.as_ref().map(|k| k.delta_log_evidence_refit);
+    let e0 = ev(first)?;
+    cands.iter().skip(1).find(|c| {
+        c.passes
+            && c.refines.is_none()
+            && c.expressions != first.expressions
+            && ev(c).is_some_and(|e| (e0 - e).abs() < INDISTINCT_NATS)
+    })
+}
+
+/// Whether `c`'s only failed leg is the placebos'.
+pub(crate) fn fails_only_placebos(c: &Scored) -> bool {
+    c.refines.is_none() && c.placebo.as_ref().is_some_and(|p| !p.passes()) && c.fails.len() == 1
+}
+
 /// The verdict for sorted candidates, with a sentence.
 pub fn decide(cands: &[Scored]) -> (Verdict, String) {
+    if let (Some(a), Some(b)) = (cands.first(), rival(cands))
+        && a.passes
+        && a.refines.is_none()
+    {
+        let ev = |c: &Scored| {
+            c.confirmation
+                .as_ref()
+                .map_or(0.0, |k| k.delta_log_evidence_refit)
+        };
+        return (
+            Verdict::CannotTell,
+            format!(
+                "cannot tell: two effects clear the criterion and the training run cannot tell \
+                 them apart (their refits' log evidence differs by {:.1} < {INDISTINCT_NATS}): {} — \
+                 {} ({}{}); or {} — {} ({}{}); {}",
+                (ev(a) - ev(b)).abs(),
+                a.effect,
+                instruction(a),
+                heldout_text(a),
+                estimate_text(a),
+                b.effect,
+                instruction(b),
+                heldout_text(b),
+                estimate_text(b),
+                separating_run(a, b)
+            ),
+        );
+    }
+    let by_placebo = cands
+        .iter()
+        .take_while(|c| !c.passes)
+        .find(|c| fails_only_placebos(c));
+    if !cands.first().is_some_and(|c| c.passes)
+        && let Some(c) = by_placebo
+        && let Some(p) = &c.placebo
+    {
+        return (
+            Verdict::CannotTell,
+            format!(
+                "cannot tell: {} — {} clears the evidence and held-out legs ({}{}) but explains the \
+                 training run no better than its own columns shifted in time (Δ log evidence \
+                 under AR(1) noise {:.1} ≤ {:.1}, the best of its placebos): a slow drift of the \
+                 residual would do as well; a second run of the same profile would separate \
+                 them (a drift does not repeat, an effect does)",
+                c.effect,
+                instruction(c),
+                heldout_text(c),
+                estimate_text(c),
+                p.statistic,
+                p.threshold
+            ),
+        );
+    }
     match cands.first() {
         Some(c) if c.passes && c.refines.is_none() => (
             Verdict::MissingEffect,
@@ -264,5 +482,126 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
             Verdict::None,
             "no significant missing effect: no candidate could be scored".into(),
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::confirm::Confirmation;
+    use crate::placebo::Placebo;
+    use tcomp_core::EffectKind;
+
+    /// A refitted candidate `expr` whose refit gained `evidence` nats and that beat (or not) its
+    /// placebos.
+    fn cand(expr: &str, evidence: f64, beats_placebos: bool) -> Scored {
+        Scored {
+            expression: expr.into(),
+            expressions: vec![expr.into()],
+            effect: format!("effect {expr}"),
+            kind: EffectKind::LaggedElement,
+            parameter: None,
+            delta_log_evidence: evidence,
+            delta_log_evidence_best: evidence,
+            residual_std_after: 1.0,
+            residual_std_before: 2.0,
+            improvement_pct: 50.0,
+            scored_improvement_pct: 50.0,
+            confirmation: Some(Confirmation {
+                residual_std_before: 2.0,
+                residual_std_after: 1.0,
+                improvement_pct: 50.0,
+                heldout: "blocks".into(),
+                splits_improved: 5,
+                splits: 5,
+                delta_log_evidence_refit: evidence,
+                verification: None,
+            }),
+            unconfirmed: None,
+            train_residual_std_after: 1.0,
+            members: 1,
+            replaces: Vec::new(),
+            refines: None,
+            search: None,
+            estimate: None,
+            parameter_scored: None,
+            placebo: Some(Placebo {
+                rho: 0.5,
+                statistic: if beats_placebos { 9.0 } else { 1.0 },
+                shifts_bins: vec![10, 20],
+                bins: 100,
+                refit: None,
+                placebos: vec![2.0, 3.0],
+                threshold: 3.0,
+                level: 1.0 / 3.0,
+            }),
+            passes: false,
+            fails: Vec::new(),
+        }
+    }
+
+    fn decided(mut cands: Vec<Scored>) -> (Verdict, String) {
+        Criterion::default().apply(0.1, &mut cands);
+        decide(&cands)
+    }
+
+    #[test]
+    fn one_clear_winner_is_a_missing_effect() {
+        let (v, t) = decided(vec![
+            cand("lag(T, 300)", 12.0, true),
+            cand("rate(T)", 10.0, true),
+        ]);
+        assert_eq!(v, Verdict::MissingEffect, "{t}");
+        assert!(t.contains("lag(T, 300)"), "{t}");
+    }
+
+    /// Two passing candidates within a nat: both named, with the run that would separate them.
+    #[test]
+    fn two_indistinct_candidates_cannot_be_told_apart() {
+        let (v, t) = decided(vec![
+            cand("lag(T, 300)", 10.4, true),
+            cand("rate(T)", 10.0, true),
+        ]);
+        assert_eq!(v, Verdict::CannotTell, "{t}");
+        assert!(t.contains("lag(T, 300)") && t.contains("rate(T)"), "{t}");
+        assert!(t.contains("ramps at a second rate"), "{t}");
+    }
+
+    /// Candidates reading different inputs: the separating run varies those inputs.
+    #[test]
+    fn the_separating_run_names_the_inputs_only_one_reads() {
+        let a = cand("supply_v", 5.0, true);
+        let b = cand("lag(t_board, 600)", 5.0, true);
+        let t = separating_run(&a, &b);
+        assert!(t.contains("in which supply_v, t_board vary"), "{t}");
+    }
+
+    /// A candidate that clears every leg but its placebos: the run cannot tell it from a drift.
+    #[test]
+    fn failing_only_the_placebos_cannot_tell() {
+        let (v, t) = decided(vec![cand("warmup(900)", 12.0, false)]);
+        assert_eq!(v, Verdict::CannotTell, "{t}");
+        assert!(t.contains("shifted in time"), "{t}");
+    }
+
+    /// Failing the placebos and another leg is "none".
+    #[test]
+    fn failing_placebos_and_evidence_is_none() {
+        let mut c = cand("warmup(900)", 12.0, false);
+        c.improvement_pct = 1.0;
+        let (v, t) = decided(vec![c]);
+        assert_eq!(v, Verdict::None, "{t}");
+    }
+
+    /// With the placebo leg off, the same candidate is named.
+    #[test]
+    fn placebos_off_names_it() {
+        let mut cands = vec![cand("warmup(900)", 12.0, false)];
+        let crit = Criterion {
+            placebos: 0,
+            ..Criterion::default()
+        };
+        crit.apply(0.1, &mut cands);
+        assert_eq!(decide(&cands).0, Verdict::MissingEffect);
     }
 }

@@ -40,6 +40,11 @@ pub fn top(s: &str) -> Result<usize, String> {
     o::TOP.parse_count(s)
 }
 
+/// `diagnose --placebos` ([`tcomp_discover::verdict::PLACEBO_COUNT`]).
+pub fn placebos(s: &str) -> Result<usize, String> {
+    tcomp_discover::verdict::PLACEBO_COUNT.parse_count(s)
+}
+
 /// A seed: any 64-bit unsigned integer.
 pub fn seed(s: &str) -> Result<u64, String> {
     o::parse_seed(s)

@@ -31,6 +31,10 @@ pub struct Args {
     /// Minimum held-out improvement (%) of the verdict.
     #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = crate::args::check::percent)]
     pub min_improvement: f64,
+    /// Placebos each candidate must beat: its columns shifted in time, the threshold the best of
+    /// them (false-alarm rate 1 / (N + 1)); 0 turns the leg off.
+    #[arg(long, default_value_t = tcomp_discover::placebo::PLACEBOS, allow_negative_numbers = true, value_parser = crate::args::check::placebos)]
+    pub placebos: usize,
     /// Candidates printed.
     #[arg(long, default_value_t = 10, allow_negative_numbers = true, value_parser = crate::args::check::top)]
     pub top: usize,
@@ -110,6 +114,7 @@ fn prepare(args: &Args) -> anyhow::Result<Prepared> {
     opts.score.gap_s = args.run.run.gap;
     opts.criterion.min_delta_log_evidence = args.min_evidence;
     opts.criterion.min_improvement_pct = args.min_improvement;
+    opts.criterion.placebos = args.placebos;
     opts.temperature.clone_from(&args.temperature);
     if args.run.overrides_reference() {
         opts.roles = Some(roles);

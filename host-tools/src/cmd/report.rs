@@ -90,6 +90,7 @@ fn diagnose(
         bin: 60.0,
         min_evidence: 5.0,
         min_improvement: 5.0,
+        placebos: tcomp_discover::placebo::PLACEBOS,
         top: 10,
         rounds: 1,
         json: false,

@@ -5,6 +5,7 @@
 //! paste), the demo prints a narrative line per candidate (before → after in the model's unit).
 //! Both take the same rows in the same order and mark a candidate that passes the criterion the
 //! same way, and both write the held-out change the same way: negative when the residual fell.
+//! The columns show each refitted candidate against its placebos ([`tcomp_discover::placebo`]).
 
 use super::num::{change_pct, num, pct};
 use std::fmt::Write as _;
@@ -25,13 +26,29 @@ pub enum Layout<'a> {
     },
 }
 
+/// The candidate's Δ log evidence under AR(1) noise against the best placebo's ("—" when it was
+/// not tested): `+7.2 > +3.1` passes the placebo leg, `+1.0 ≤ +3.1` does not.
+pub fn placebo(c: &Scored) -> String {
+    c.placebo.as_ref().map_or_else(
+        || "—".to_string(),
+        |p| {
+            format!(
+                "{:+.1} {} {:+.1}",
+                p.statistic,
+                if p.passes() { ">" } else { "≤" },
+                p.threshold
+            )
+        },
+    )
+}
+
 /// Appends the first `top` candidates of `candidates` (best first) to `out`.
 pub fn table(out: &mut String, candidates: &[Scored], top: usize, layout: Layout<'_>) {
     if let Layout::Columns { .. } = layout {
         let _ = writeln!(
             out,
-            "  {:<3}{:<58} {:>9} {:>14} {:>9}  {:<8} expression",
-            "", "effect", "Δ ln E", "held-out", "change", "from"
+            "  {:<3}{:<58} {:>9} {:>14} {:>9}  {:<8} {:>15}  expression",
+            "", "effect", "Δ ln E", "held-out", "change", "from", "AR(1) / placebo"
         );
     }
     for c in candidates.iter().take(top) {
@@ -40,13 +57,14 @@ pub fn table(out: &mut String, candidates: &[Scored], top: usize, layout: Layout
             Layout::Columns { unit } => {
                 let _ = writeln!(
                     out,
-                    "  {:<3}{:<58} {:>+9.1} {:>14} {:>9}  {:<8} {}",
+                    "  {:<3}{:<58} {:>+9.1} {:>14} {:>9}  {:<8} {:>15}  {}",
                     if c.passes { "✔" } else { "" },
                     c.effect,
                     c.delta_log_evidence,
                     num(c.residual_std_after, unit),
                     pct(change_pct(c.residual_std_before, c.residual_std_after)),
                     if refitted { "refit" } else { "scoring" },
+                    placebo(c),
                     c.expressions.join(" ; ")
                 );
             }

@@ -275,6 +275,81 @@ pub(super) fn candidate_plots_in(
         .collect()
 }
 
+/// The placebo test of each leading candidate that was tested: its placebos' statistics, sorted,
+/// as dots; the candidate's own and the acceptance threshold as lines — what the acceptance was
+/// judged against ([`tcomp_discover::placebo`]). A candidate judged in the second stage shows its
+/// held-out improvement against its refitted placebos'.
+pub(super) fn placebo_plots(a: &Analysis) -> Vec<String> {
+    a.diagnosis
+        .candidates
+        .iter()
+        .take(3)
+        .filter_map(|c| {
+            let pl = c.placebo.as_ref()?;
+            let (values, own, threshold, label) = match &pl.refit {
+                Some(r) => {
+                    let max = r
+                        .placebos_pct
+                        .iter()
+                        .copied()
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    (
+                        r.placebos_pct.clone(),
+                        r.improvement_pct,
+                        max,
+                        "held-out improvement of the trainer's refit (%)",
+                    )
+                }
+                None => (
+                    pl.placebos.clone(),
+                    pl.statistic,
+                    pl.threshold,
+                    "Δ log evidence under AR(1) noise",
+                ),
+            };
+            let mut sorted: Vec<f64> = values.into_iter().filter(|v| v.is_finite()).collect();
+            sorted.sort_by(f64::total_cmp);
+            if sorted.is_empty() {
+                return None;
+            }
+            let xs: Vec<f64> = (1..=sorted.len()).map(|i| i as f64).collect();
+            let mut all = sorted.clone();
+            all.extend([own, threshold].iter().filter(|v| v.is_finite()));
+            let mut p = Plot::new(
+                &format!(
+                    "Placebos of {}: {} (its columns shifted in time; it {} them)",
+                    c.effect,
+                    label,
+                    if pl.passes() {
+                        "beats"
+                    } else {
+                        "does not beat"
+                    }
+                ),
+                "placebo, sorted",
+                label,
+                (0.0, sorted.len() as f64 + 1.0),
+                range(&all),
+            );
+            p.dots(&xs, &sorted, &["#7f7f7f"]);
+            p.legend.push(("placebos".into(), "#7f7f7f".into()));
+            let ends = [0.0, sorted.len() as f64 + 1.0];
+            p.line(&ends, &[own, own], "#d62728", "the candidate", false, false);
+            if threshold.is_finite() {
+                p.line(
+                    &ends,
+                    &[threshold, threshold],
+                    "#1f77b4",
+                    "threshold",
+                    false,
+                    true,
+                );
+            }
+            Some(p.finish())
+        })
+        .collect()
+}
+
 /// Row range of segment `s` in `run`.
 fn rows_of(run: &Run, s: &SegmentRow) -> (usize, usize) {
     let a = run.time.partition_point(|&x| x < s.start_s);

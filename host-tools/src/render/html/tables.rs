@@ -18,6 +18,7 @@ pub(super) fn verdict(h: &mut String, a: &Analysis, unit: &str, noise_floor: Opt
         "<h2>Verdict</h2>\n<p class=\"verdict\" id=\"verdict\" data-verdict=\"{}\">{}</p>\n<p><small>Criterion: {}. Held-out: {}; noise floor estimate {}{}.</small></p>\n",
         match d.verdict {
             Verdict::MissingEffect => "missing_effect",
+            Verdict::CannotTell => "cannot_tell",
             Verdict::None => "none",
         },
         esc(&d.verdict_text),
@@ -30,18 +31,19 @@ pub(super) fn verdict(h: &mut String, a: &Analysis, unit: &str, noise_floor: Opt
     );
     let _ = write!(
         h,
-        "<h2>Candidates</h2>\n<div class=\"scroll\"><table><tr><th>effect</th><th>expression</th><th>Δ log evidence</th><th>held-out before</th><th>held-out after</th><th>change</th><th>passes</th></tr>\n"
+        "<h2>Candidates</h2>\n<div class=\"scroll\"><table><tr><th>effect</th><th>expression</th><th>Δ log evidence</th><th>held-out before</th><th>held-out after</th><th>change</th><th title=\"Δ log evidence under AR(1) noise against the best placebo (its columns shifted in time)\">vs placebos</th><th>passes</th></tr>\n"
     );
     for c in d.candidates.iter().take(12) {
         let _ = writeln!(
             h,
-            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             esc(&c.effect),
             esc(&c.expressions.join(" ; ")),
             num::signed(c.delta_log_evidence, 1),
             esc(&num::num(c.residual_std_before, unit)),
             esc(&num::num(c.residual_std_after, unit)),
             num::pct(num::change_pct(c.residual_std_before, c.residual_std_after)),
+            esc(&crate::render::candidates::placebo(c)),
             if c.passes { "yes" } else { "no" }
         );
     }
