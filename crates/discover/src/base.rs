@@ -306,6 +306,19 @@ impl Prepared {
         }
     }
 
+    /// The scoring design with `cols` appended as one more prior group, the groups, and the base
+    /// fit's α (one more, 1, for the new group) to start the evidence iteration from: how every
+    /// candidate — and every placebo of one — is scored against the same base.
+    pub(crate) fn with_columns(&self, cols: &[Vec<f64>]) -> (DMatrix<f64>, Vec<usize>, Vec<f64>) {
+        let phi = hcat(&self.phi, cols);
+        let g = self.groups.iter().copied().max().unwrap_or(0) + 1;
+        let mut groups = self.groups.clone();
+        groups.extend(std::iter::repeat_n(g, cols.len()));
+        let mut a0 = self.base.alpha.clone();
+        a0.push(1.0);
+        (phi, groups, a0)
+    }
+
     /// Standardised training columns and, with a verification run, its columns.
     pub(crate) fn standardised(&self, exprs: &[String]) -> Result<(Columns, Option<Columns>)> {
         let time_col = self.time.clone();

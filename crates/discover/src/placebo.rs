@@ -51,7 +51,6 @@
 //! The candidates tested are the refitted ones ([`crate::confirm`]), at their estimated parameters.
 
 use crate::base::Prepared;
-use crate::design::hcat;
 use crate::score::Scored;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -175,12 +174,7 @@ fn shifts(cols: &[Vec<f64>], n: usize, k: usize) -> Vec<usize> {
 /// Δ log evidence under AR(1) noise `rho` of the scoring design plus `cols` over the base's
 /// `base_evidence`.
 fn statistic(p: &Prepared, rho: f64, base_evidence: f64, cols: &[Vec<f64>]) -> f64 {
-    let phi = hcat(&p.phi, cols);
-    let g = p.groups.iter().copied().max().unwrap_or(0) + 1;
-    let mut groups = p.groups.clone();
-    groups.extend(std::iter::repeat_n(g, cols.len()));
-    let mut a0 = p.base.alpha.clone();
-    a0.resize(g + 1, 1.0);
+    let (phi, groups, a0) = p.with_columns(cols);
     ar1::fit(&phi, &p.y, &groups, (&a0, p.base.beta), rho)
         .map_or(f64::NEG_INFINITY, |(_, e)| e - base_evidence)
 }

@@ -31,7 +31,7 @@
 
 pub use crate::base::{BaseFigures, Prepared, base_residual, binned_feature, prepare};
 use crate::candidates::{Candidate, EffectKind, Family, Search};
-use crate::design::{hcat, mean_sd};
+use crate::design::mean_sd;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -211,12 +211,7 @@ fn score_member(p: &Prepared, c: &Candidate) -> std::result::Result<MemberScore,
             ));
         }
     }
-    let phi = hcat(&p.phi, &cols);
-    let cand_group = p.groups.iter().copied().max().unwrap_or(0) + 1;
-    let mut groups = p.groups.clone();
-    groups.extend(std::iter::repeat_n(cand_group, cols.len()));
-    let mut a0 = p.base.alpha.clone();
-    a0.push(1.0);
+    let (phi, groups, a0) = p.with_columns(&cols);
     let fit = evidence::fit(&phi, &p.y, &groups, Some((&a0, p.base.beta)))
         .ok_or("the evidence iteration failed")?;
     let (held, _) = p
