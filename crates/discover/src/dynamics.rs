@@ -33,6 +33,10 @@ pub const BANK: usize = 10;
 /// A column whose prior precision stays below this (normalised units: a prior std above 1 %) is on.
 const ON_ALPHA: f64 = 1e4;
 
+/// Δ log evidence by which the bank's reading must beat what the families already try: "strong"
+/// on Jeffreys' scale, the criterion's own default.
+const STRONG: f64 = 5.0;
+
 /// Two time constants closer than this ratio are one.
 const DISTINCT_RATIO: f64 = 3.0;
 
@@ -144,6 +148,21 @@ fn evidence_of(p: &Prepared, x: &str, taus: &[f64]) -> f64 {
         .map_or(f64::NEG_INFINITY, |f| f.log_evidence)
 }
 
+/// Log evidence of the scoring design plus the raw column `x`.
+fn raw_evidence(p: &Prepared, x: &str) -> f64 {
+    let Ok((cols, _)) = p.standardised(&[x.to_string()]) else {
+        return f64::NEG_INFINITY;
+    };
+    let phi = hcat(&p.phi, &cols);
+    let g0 = p.groups.iter().copied().max().unwrap_or(0) + 1;
+    let mut groups = p.groups.clone();
+    groups.extend(std::iter::repeat_n(g0, cols.len()));
+    let mut a0 = p.base.alpha.clone();
+    a0.resize(g0 + 1, 1.0);
+    evidence::fit(&phi, &p.y, &groups, Some((&a0, p.base.beta)))
+        .map_or(f64::NEG_INFINITY, |f| f.log_evidence)
+}
+
 /// The bank's time constants re-estimated together: each in turn by a golden-section search of
 /// the evidence over ln τ (within a factor of [`DISTINCT_RATIO`] of where it was, inside the lag
 /// range) with the others held, two sweeps — the grid's step is a factor of 1.8, and a slow path
@@ -206,6 +225,18 @@ pub fn propose(p: &Prepared, src: &Sources) -> Vec<Family> {
             let taus = time_constants(p, x);
             let wanted = if *thermal { 2 } else { 1 };
             if taus.len() < wanted {
+                return None;
+            }
+            // The bank's reading must beat, by strong evidence, what the families already try:
+            // one lag of a temperature (re-estimated here), the raw non-thermal input.
+            let rival = if *thermal {
+                let ln = taus.iter().map(|t| t.ln()).sum::<f64>() / taus.len() as f64;
+                let one = refined(p, x, vec![rounded(ln.exp())]);
+                evidence_of(p, x, &one)
+            } else {
+                raw_evidence(p, x)
+            };
+            if evidence_of(p, x, &taus) < rival + STRONG {
                 return None;
             }
             let list = taus
