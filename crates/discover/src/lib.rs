@@ -4,6 +4,7 @@
 //!
 //! Modules: [`segments`] (where it fails: warm-up, holds, ramps, bands, worst intervals),
 //! [`candidates`] (which effects could be missing, with physical names and ready expressions),
+//! [`dynamics`] (through how many lags, and which, the residual responds to each input),
 //! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual, against
 //! the base model `base` prepares once from the columns and transform of `design`),
 //! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`confirm`] (the
@@ -27,6 +28,7 @@ mod base;
 pub mod candidates;
 pub mod confirm;
 mod design;
+pub mod dynamics;
 pub mod error;
 pub mod families;
 pub mod param;
@@ -220,7 +222,8 @@ pub fn diagnose(
         exclude.push(r.as_str());
     }
     let src = candidates::sources(data, &exclude, &info.spec.signals);
-    let families = candidates::generate(&src, &info.spec.features);
+    let mut families = candidates::generate(&src, &info.spec.features);
+    families.extend(dynamics::propose(&prepared, &src));
     let fits = families.iter().map(|f| f.members.len()).sum();
     let (mut cands, mut skipped) = score::score(&prepared, &families);
     for e in &src.outputs {

@@ -1,0 +1,294 @@
+//! The residual's dynamics read from the data: through which first-order lags of each input the
+//! residual responds, and how many time constants that takes.
+//!
+//! Why: the lag families ([`crate::candidates`]) try one τ at a time. A thermal path with two very
+//! different time constants on one thermometer is then named as one lag half-way between them,
+//! and a non-thermal input whose effect arrives through a lag is named raw. Here the data say how
+//! many time constants there are and where.
+//!
+//! How: a bank of `lag(x, τ)` columns at [`BANK`] log-spaced τ over the lag families' range is
+//! added to the scoring design (the base model's Gaussians fixed, [`crate::score`]), every column
+//! with its own prior precision — automatic relevance determination by MacKay's evidence: a τ the
+//! residual does not respond through is switched off. The columns that stay on, grouped where they
+//! are neighbours on the grid, are the time constants; each group's τ is the geometric mean of its
+//! members weighted by their weights' sizes. Two groups or more on a temperature propose "thermal
+//! paths from x, τ ≈ a and b" (one group is what the lag families already find); one group or more
+//! on a non-thermal input propose "x acts through a lag of τ ≈ a". The proposals are then scored,
+//! refitted, placebo-tested and judged like every other candidate: this module only proposes.
+//!
+//! Pruned by physics (only the sensor's temperatures and its non-thermal inputs, never the
+//! chamber's air or another inertial output — [`crate::candidates::Sources`] has sorted them) and by
+//! evidence (the bank is one fit per input; only the time constants it keeps are proposed).
+
+use crate::base::Prepared;
+use crate::candidates::{Candidate, EffectKind, Family, LAG_RANGE_S, Sources};
+use crate::design::hcat;
+use rayon::prelude::*;
+use tcomp_core::expr;
+use tcomp_train::evidence;
+
+/// Time constants in the bank: about one per factor of 1.8 over 120 s … 20,000 s.
+pub const BANK: usize = 10;
+
+/// A column whose prior precision stays below this (normalised units: a prior std above 1 %) is on.
+const ON_ALPHA: f64 = 1e4;
+
+/// Δ log evidence by which the bank's reading must beat what the families already try: "strong"
+/// on Jeffreys' scale, the criterion's own default.
+const STRONG: f64 = 5.0;
+
+/// Two time constants closer than this ratio are one.
+const DISTINCT_RATIO: f64 = 3.0;
+
+/// The bank's time constants (s).
+fn taus() -> Vec<f64> {
+    let (lo, hi) = LAG_RANGE_S;
+    (0..BANK)
+        .map(|i| lo * (hi / lo).powf(i as f64 / (BANK - 1) as f64))
+        .collect()
+}
+
+/// A time constant rounded to two significant figures (what a user types).
+fn rounded(tau: f64) -> f64 {
+    crate::param::two_significant(tau)
+}
+
+/// "τ ≈ 25 min" or "τ ≈ 300 s".
+fn minutes(tau: f64) -> String {
+    if tau >= 600.0 {
+        format!("τ ≈ {:.0} min", tau / 60.0)
+    } else {
+        format!("τ ≈ {tau:.0} s")
+    }
+}
+
+/// The time constants the residual responds to `x` through, by the bank's evidence fit on `p`
+/// (ascending; empty when the bank cannot be fitted).
+pub fn time_constants(p: &Prepared, x: &str) -> Vec<f64> {
+    let taus = taus();
+    let exprs: Vec<String> = taus
+        .iter()
+        .map(|&t| expr::lag(expr::name(x), rounded(t)).to_string())
+        .collect();
+    // One expression at a time: a feature program holds a few features, not a bank.
+    let mut cols = Vec::with_capacity(exprs.len());
+    for e in &exprs {
+        match p.standardised(std::slice::from_ref(e)) {
+            Ok((c, _)) => cols.extend(c),
+            Err(_) => return Vec::new(),
+        }
+    }
+    let phi = hcat(&p.phi, &cols);
+    let g0 = p.groups.iter().copied().max().unwrap_or(0) + 1;
+    let mut groups = p.groups.clone();
+    groups.extend((0..cols.len()).map(|k| g0 + k));
+    let mut a0 = p.base.alpha.clone();
+    a0.resize(g0 + cols.len(), 1.0);
+    let Some(fit) = evidence::fit(&phi, &p.y, &groups, Some((&a0, p.base.beta))) else {
+        return Vec::new();
+    };
+
+    let base_cols = p.phi.ncols();
+    let on: Vec<(usize, f64)> = (0..cols.len())
+        .filter_map(|k| {
+            let alpha = fit.alpha.get(g0 + k).copied().unwrap_or(f64::INFINITY);
+            let w = fit.w.get(base_cols + k).copied().unwrap_or(0.0).abs();
+            (alpha < ON_ALPHA && w > 0.0).then_some((k, w))
+        })
+        .collect();
+    // Neighbours on the grid are one time constant.
+    let mut groups_on: Vec<Vec<(usize, f64)>> = Vec::new();
+    for (k, w) in on {
+        match groups_on.last_mut() {
+            Some(g) if g.last().is_some_and(|(j, _)| k == j + 1) => g.push((k, w)),
+            _ => groups_on.push(vec![(k, w)]),
+        }
+    }
+    let mut out: Vec<f64> = groups_on
+        .iter()
+        .filter_map(|g| {
+            let wsum: f64 = g.iter().map(|(_, w)| w).sum();
+            if wsum <= 0.0 {
+                return None;
+            }
+            let ln: f64 = g
+                .iter()
+                .map(|(k, w)| w * taus.get(*k).copied().unwrap_or(1.0).ln())
+                .sum::<f64>()
+                / wsum;
+            Some(rounded(ln.exp()))
+        })
+        .collect();
+    // Groups that ended up closer than the distinct ratio are one.
+    out.dedup_by(|b, a| *b / *a < DISTINCT_RATIO);
+    let mut out = refined(p, x, out);
+    out.sort_by(f64::total_cmp);
+    out.dedup_by(|b, a| *b / *a < DISTINCT_RATIO);
+    out
+}
+
+/// Log evidence of the scoring design plus `lag(x, τ)` for every τ of `taus` (−∞ when a column
+/// cannot be computed or the fit fails).
+fn evidence_of(p: &Prepared, x: &str, taus: &[f64]) -> f64 {
+    let mut cols = Vec::with_capacity(taus.len());
+    for &t in taus {
+        let e = expr::lag(expr::name(x), t).to_string();
+        match p.standardised(std::slice::from_ref(&e)) {
+            Ok((c, _)) => cols.extend(c),
+            Err(_) => return f64::NEG_INFINITY,
+        }
+    }
+    let phi = hcat(&p.phi, &cols);
+    let g0 = p.groups.iter().copied().max().unwrap_or(0) + 1;
+    let mut groups = p.groups.clone();
+    groups.extend((0..cols.len()).map(|k| g0 + k));
+    let mut a0 = p.base.alpha.clone();
+    a0.resize(g0 + cols.len(), 1.0);
+    evidence::fit(&phi, &p.y, &groups, Some((&a0, p.base.beta)))
+        .map_or(f64::NEG_INFINITY, |f| f.log_evidence)
+}
+
+/// Log evidence of the scoring design plus the raw column `x`.
+fn raw_evidence(p: &Prepared, x: &str) -> f64 {
+    let Ok((cols, _)) = p.standardised(&[x.to_string()]) else {
+        return f64::NEG_INFINITY;
+    };
+    let phi = hcat(&p.phi, &cols);
+    let g0 = p.groups.iter().copied().max().unwrap_or(0) + 1;
+    let mut groups = p.groups.clone();
+    groups.extend(std::iter::repeat_n(g0, cols.len()));
+    let mut a0 = p.base.alpha.clone();
+    a0.resize(g0 + 1, 1.0);
+    evidence::fit(&phi, &p.y, &groups, Some((&a0, p.base.beta)))
+        .map_or(f64::NEG_INFINITY, |f| f.log_evidence)
+}
+
+/// The bank's time constants re-estimated together: each in turn by a golden-section search of
+/// the evidence over ln τ (within a factor of [`DISTINCT_RATIO`] of where it was, inside the lag
+/// range) with the others held, two sweeps — the grid's step is a factor of 1.8, and a slow path
+/// the model's own temperature terms half absorb pulls its neighbour along.
+fn refined(p: &Prepared, x: &str, mut taus: Vec<f64>) -> Vec<f64> {
+    const SWEEPS: usize = 2;
+    const STEPS: usize = 12;
+    let (lo_r, hi_r) = (LAG_RANGE_S.0.ln(), LAG_RANGE_S.1.ln());
+    let phi = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..SWEEPS {
+        for i in 0..taus.len() {
+            let Some(&t0) = taus.get(i) else { continue };
+            let mut a = (t0 / DISTINCT_RATIO).ln().max(lo_r);
+            let mut b = (t0 * DISTINCT_RATIO).ln().min(hi_r);
+            let f = |v: f64, taus: &mut Vec<f64>| {
+                if let Some(slot) = taus.get_mut(i) {
+                    *slot = v.exp();
+                }
+                evidence_of(p, x, taus)
+            };
+            let mut c = b - phi * (b - a);
+            let mut d = a + phi * (b - a);
+            let (mut fc, mut fd) = (f(c, &mut taus), f(d, &mut taus));
+            for _ in 0..STEPS {
+                if fc >= fd {
+                    b = d;
+                    d = c;
+                    fd = fc;
+                    c = b - phi * (b - a);
+                    fc = f(c, &mut taus);
+                } else {
+                    a = c;
+                    c = d;
+                    fc = fd;
+                    d = a + phi * (b - a);
+                    fd = f(d, &mut taus);
+                }
+            }
+            let best = if fc >= fd { c } else { d };
+            if let Some(slot) = taus.get_mut(i) {
+                *slot = rounded(best.exp());
+            }
+        }
+    }
+    taus
+}
+
+/// The hypotheses the bank proposes over `src` (see the module doc), each a one-member family.
+pub fn propose(p: &Prepared, src: &Sources) -> Vec<Family> {
+    let mut inputs: Vec<(String, bool)> = src
+        .temperatures
+        .iter()
+        .map(|t| (t.clone(), true))
+        .chain(src.inputs.iter().map(|x| (x.clone(), false)))
+        .collect();
+    inputs.dedup();
+    inputs
+        .par_iter()
+        .filter_map(|(x, thermal)| {
+            let taus = time_constants(p, x);
+            let wanted = if *thermal { 2 } else { 1 };
+            if taus.len() < wanted {
+                return None;
+            }
+            // The bank's reading must beat, by strong evidence, what the families already try:
+            // one lag of a temperature (re-estimated here), the raw non-thermal input.
+            let rival = if *thermal {
+                let ln = taus.iter().map(|t| t.ln()).sum::<f64>() / taus.len() as f64;
+                let one = refined(p, x, vec![rounded(ln.exp())]);
+                evidence_of(p, x, &one)
+            } else {
+                raw_evidence(p, x)
+            };
+            if evidence_of(p, x, &taus) < rival + STRONG {
+                return None;
+            }
+            let list = taus
+                .iter()
+                .map(|t| minutes(*t))
+                .collect::<Vec<_>>()
+                .join(" and ");
+            let (kind, effect) = if *thermal {
+                (
+                    EffectKind::LaggedElement,
+                    format!("{} thermal paths from {x}, {list}", taus.len()),
+                )
+            } else {
+                (
+                    EffectKind::NonThermal,
+                    format!("{x} acts through a lag of {list}"),
+                )
+            };
+            Some(Family {
+                members: vec![Candidate {
+                    kind,
+                    effect,
+                    expressions: taus
+                        .iter()
+                        .map(|&t| expr::lag(expr::name(x), t).to_string())
+                        .collect(),
+                    parameter: None,
+                    replaces: Vec::new(),
+                    refines: None,
+                }],
+                search: None,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_bank_spans_the_lag_range() {
+        let t = taus();
+        assert_eq!(t.len(), BANK);
+        assert!((t[0] - LAG_RANGE_S.0).abs() < 1e-9);
+        assert!((t[BANK - 1] - LAG_RANGE_S.1).abs() < 1e-6);
+        assert!(t.windows(2).all(|w| w[1] / w[0] < DISTINCT_RATIO));
+    }
+
+    #[test]
+    fn minutes_read_as_typed() {
+        assert_eq!(minutes(300.0), "τ ≈ 300 s");
+        assert_eq!(minutes(1500.0), "τ ≈ 25 min");
+    }
+}
