@@ -116,6 +116,10 @@ pub struct Family {
     pub members: Vec<Candidate>,
     /// How the parameter is searched beyond the grid (none for a plain candidate).
     pub search: Option<Search>,
+    /// When the members were read off a bank of columns rather than a parameter's grid (the lag
+    /// bank of [`crate::dynamics`]): the bank's expressions. The placebo leg searches each
+    /// placebo's bank the same way ([`crate::placebo`]).
+    pub bank: Vec<String>,
 }
 
 /// What candidates are built from.
@@ -213,6 +217,7 @@ fn single(kind: EffectKind, effect: String, exprs: Vec<Expr>) -> Family {
             refines: None,
         }],
         search: None,
+        bank: Vec::new(),
     }
 }
 

@@ -24,6 +24,7 @@ use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, LAG_RANGE_S, Sources};
 use crate::design::hcat;
 use rayon::prelude::*;
+use std::collections::HashMap;
 use tcomp_core::expr;
 use tcomp_train::evidence;
 
@@ -32,10 +33,6 @@ pub const BANK: usize = 10;
 
 /// A column whose prior precision stays below this (normalised units: a prior std above 1 %) is on.
 const ON_ALPHA: f64 = 1e4;
-
-/// Δ log evidence by which the bank's reading must beat what the families already try: "strong"
-/// on Jeffreys' scale, the criterion's own default.
-const STRONG: f64 = 5.0;
 
 /// Two time constants closer than this ratio are one.
 const DISTINCT_RATIO: f64 = 3.0;
@@ -62,39 +59,115 @@ fn minutes(tau: f64) -> String {
     }
 }
 
+/// The bank over `x`: `x` itself (a response without delay), then `lag(x, τ)` at every τ of
+/// [`taus`].
+pub fn bank(x: &str) -> Vec<String> {
+    std::iter::once(x.to_string())
+        .chain(
+            taus()
+                .iter()
+                .map(|&t| expr::lag(expr::name(x), rounded(t)).to_string()),
+        )
+        .collect()
+}
+
+/// The standardised, binned training columns of `lag(x, τ)` over one input, each computed once:
+/// the golden-section search of [`refined`] moves one τ and holds the others.
+struct Lags<'a> {
+    p: &'a Prepared,
+    x: &'a str,
+    /// The column of `x` itself.
+    raw: Option<Vec<f64>>,
+    done: HashMap<u64, Option<Vec<f64>>>,
+}
+
+impl<'a> Lags<'a> {
+    fn new(p: &'a Prepared, x: &'a str) -> Self {
+        let raw = p
+            .standardised(&[x.to_string()])
+            .ok()
+            .and_then(|(c, _)| c.into_iter().next());
+        Lags {
+            p,
+            x,
+            raw,
+            done: HashMap::new(),
+        }
+    }
+
+    /// The column of `lag(x, tau)` (`None` when it cannot be computed).
+    fn column(&mut self, tau: f64) -> Option<Vec<f64>> {
+        let (p, x) = (self.p, self.x);
+        self.done
+            .entry(tau.to_bits())
+            .or_insert_with(|| {
+                // One expression at a time: a feature program holds a few features, not a bank.
+                let e = expr::lag(expr::name(x), tau).to_string();
+                p.standardised(std::slice::from_ref(&e))
+                    .ok()
+                    .and_then(|(c, _)| c.into_iter().next())
+            })
+            .clone()
+    }
+
+    /// The evidence fit of the scoring design plus `x` and `lag(x, τ)` for every τ of `taus`,
+    /// each column its own prior group (`None` when a column cannot be computed or the fit
+    /// fails). `x` itself is always in: a residual that follows the input without delay (or the
+    /// model's own misfit of it, when the model has it) is not read as a lag.
+    fn fit(&mut self, taus: &[f64]) -> Option<evidence::GroupFit> {
+        let mut cols = vec![self.raw.clone()?];
+        for &t in taus {
+            cols.push(self.column(t)?);
+        }
+        let p = self.p;
+        let phi = hcat(&p.phi, &cols);
+        let g0 = p.groups.iter().copied().max().unwrap_or(0) + 1;
+        let mut groups = p.groups.clone();
+        groups.extend((0..cols.len()).map(|k| g0 + k));
+        let mut a0 = p.base.alpha.clone();
+        a0.resize(g0 + cols.len(), 1.0);
+        evidence::fit(&phi, &p.y, &groups, Some((&a0, p.base.beta)))
+    }
+
+    /// Log evidence of [`Lags::fit`] (−∞ when it fails).
+    fn evidence(&mut self, taus: &[f64]) -> f64 {
+        self.fit(taus).map_or(f64::NEG_INFINITY, |f| f.log_evidence)
+    }
+}
+
+/// How the residual responds to one input, read off the bank.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Reading {
+    /// Whether it responds to the input without delay too (its column stays on).
+    pub direct: bool,
+    /// The time constants it responds through (s, ascending).
+    pub taus: Vec<f64>,
+}
+
 /// The time constants the residual responds to `x` through, by the bank's evidence fit on `p`
 /// (ascending; empty when the bank cannot be fitted).
 pub fn time_constants(p: &Prepared, x: &str) -> Vec<f64> {
-    let taus = taus();
-    let exprs: Vec<String> = taus
-        .iter()
-        .map(|&t| expr::lag(expr::name(x), rounded(t)).to_string())
-        .collect();
-    // One expression at a time: a feature program holds a few features, not a bank.
-    let mut cols = Vec::with_capacity(exprs.len());
-    for e in &exprs {
-        match p.standardised(std::slice::from_ref(e)) {
-            Ok((c, _)) => cols.extend(c),
-            Err(_) => return Vec::new(),
-        }
-    }
-    let phi = hcat(&p.phi, &cols);
-    let g0 = p.groups.iter().copied().max().unwrap_or(0) + 1;
-    let mut groups = p.groups.clone();
-    groups.extend((0..cols.len()).map(|k| g0 + k));
-    let mut a0 = p.base.alpha.clone();
-    a0.resize(g0 + cols.len(), 1.0);
-    let Some(fit) = evidence::fit(&phi, &p.y, &groups, Some((&a0, p.base.beta))) else {
-        return Vec::new();
-    };
+    read(p, x).taus
+}
 
+/// How the residual responds to `x` (see the module doc).
+pub fn read(p: &Prepared, x: &str) -> Reading {
+    let taus: Vec<f64> = taus().into_iter().map(rounded).collect();
+    let mut lags = Lags::new(p, x);
+    let Some(fit) = lags.fit(&taus) else {
+        return Reading::default();
+    };
+    let g0 = p.groups.iter().copied().max().unwrap_or(0) + 1;
     let base_cols = p.phi.ncols();
-    let on: Vec<(usize, f64)> = (0..cols.len())
-        .filter_map(|k| {
-            let alpha = fit.alpha.get(g0 + k).copied().unwrap_or(f64::INFINITY);
-            let w = fit.w.get(base_cols + k).copied().unwrap_or(0.0).abs();
-            (alpha < ON_ALPHA && w > 0.0).then_some((k, w))
-        })
+    let is_on = |k: usize| {
+        let alpha = fit.alpha.get(g0 + k).copied().unwrap_or(f64::INFINITY);
+        let w = fit.w.get(base_cols + k).copied().unwrap_or(0.0).abs();
+        (alpha < ON_ALPHA && w > 0.0).then_some(w)
+    };
+    // Column 0 is `x` itself, the lags follow.
+    let direct = is_on(0).is_some();
+    let on: Vec<(usize, f64)> = (0..taus.len())
+        .filter_map(|k| is_on(k + 1).map(|w| (k, w)))
         .collect();
     // Neighbours on the grid are one time constant.
     let mut groups_on: Vec<Vec<(usize, f64)>> = Vec::new();
@@ -121,53 +194,17 @@ pub fn time_constants(p: &Prepared, x: &str) -> Vec<f64> {
         .collect();
     // Groups that ended up closer than the distinct ratio are one.
     out.dedup_by(|b, a| *b / *a < DISTINCT_RATIO);
-    let mut out = refined(p, x, out);
+    let mut out = refined(&mut lags, out);
     out.sort_by(f64::total_cmp);
     out.dedup_by(|b, a| *b / *a < DISTINCT_RATIO);
-    out
-}
-
-/// Log evidence of the scoring design plus `lag(x, τ)` for every τ of `taus` (−∞ when a column
-/// cannot be computed or the fit fails).
-fn evidence_of(p: &Prepared, x: &str, taus: &[f64]) -> f64 {
-    let mut cols = Vec::with_capacity(taus.len());
-    for &t in taus {
-        let e = expr::lag(expr::name(x), t).to_string();
-        match p.standardised(std::slice::from_ref(&e)) {
-            Ok((c, _)) => cols.extend(c),
-            Err(_) => return f64::NEG_INFINITY,
-        }
-    }
-    let phi = hcat(&p.phi, &cols);
-    let g0 = p.groups.iter().copied().max().unwrap_or(0) + 1;
-    let mut groups = p.groups.clone();
-    groups.extend((0..cols.len()).map(|k| g0 + k));
-    let mut a0 = p.base.alpha.clone();
-    a0.resize(g0 + cols.len(), 1.0);
-    evidence::fit(&phi, &p.y, &groups, Some((&a0, p.base.beta)))
-        .map_or(f64::NEG_INFINITY, |f| f.log_evidence)
-}
-
-/// Log evidence of the scoring design plus the raw column `x`.
-fn raw_evidence(p: &Prepared, x: &str) -> f64 {
-    let Ok((cols, _)) = p.standardised(&[x.to_string()]) else {
-        return f64::NEG_INFINITY;
-    };
-    let phi = hcat(&p.phi, &cols);
-    let g0 = p.groups.iter().copied().max().unwrap_or(0) + 1;
-    let mut groups = p.groups.clone();
-    groups.extend(std::iter::repeat_n(g0, cols.len()));
-    let mut a0 = p.base.alpha.clone();
-    a0.resize(g0 + 1, 1.0);
-    evidence::fit(&phi, &p.y, &groups, Some((&a0, p.base.beta)))
-        .map_or(f64::NEG_INFINITY, |f| f.log_evidence)
+    Reading { direct, taus: out }
 }
 
 /// The bank's time constants re-estimated together: each in turn by a golden-section search of
 /// the evidence over ln τ (within a factor of [`DISTINCT_RATIO`] of where it was, inside the lag
 /// range) with the others held, two sweeps — the grid's step is a factor of 1.8, and a slow path
 /// the model's own temperature terms half absorb pulls its neighbour along.
-fn refined(p: &Prepared, x: &str, mut taus: Vec<f64>) -> Vec<f64> {
+fn refined(lags: &mut Lags<'_>, mut taus: Vec<f64>) -> Vec<f64> {
     const SWEEPS: usize = 2;
     const STEPS: usize = 12;
     let (lo_r, hi_r) = (LAG_RANGE_S.0.ln(), LAG_RANGE_S.1.ln());
@@ -177,11 +214,11 @@ fn refined(p: &Prepared, x: &str, mut taus: Vec<f64>) -> Vec<f64> {
             let Some(&t0) = taus.get(i) else { continue };
             let mut a = (t0 / DISTINCT_RATIO).ln().max(lo_r);
             let mut b = (t0 * DISTINCT_RATIO).ln().min(hi_r);
-            let f = |v: f64, taus: &mut Vec<f64>| {
+            let mut f = |v: f64, taus: &mut Vec<f64>| {
                 if let Some(slot) = taus.get_mut(i) {
                     *slot = v.exp();
                 }
-                evidence_of(p, x, taus)
+                lags.evidence(taus)
             };
             let mut c = b - phi * (b - a);
             let mut d = a + phi * (b - a);
@@ -210,8 +247,9 @@ fn refined(p: &Prepared, x: &str, mut taus: Vec<f64>) -> Vec<f64> {
     taus
 }
 
-/// The hypotheses the bank proposes over `src` (see the module doc), each a one-member family.
-pub fn propose(p: &Prepared, src: &Sources) -> Vec<Family> {
+/// The hypotheses the bank proposes over `src` (see the module doc), each a one-member family;
+/// `features` are the model's, so that an input it already has is not proposed again.
+pub fn propose(p: &Prepared, src: &Sources, features: &[String]) -> Vec<Family> {
     let mut inputs: Vec<(String, bool)> = src
         .temperatures
         .iter()
@@ -222,52 +260,62 @@ pub fn propose(p: &Prepared, src: &Sources) -> Vec<Family> {
     inputs
         .par_iter()
         .filter_map(|(x, thermal)| {
-            let taus = time_constants(p, x);
+            let r = read(p, x);
             let wanted = if *thermal { 2 } else { 1 };
-            if taus.len() < wanted {
+            if r.taus.len() < wanted {
                 return None;
             }
-            // The bank's reading must beat, by strong evidence, what the families already try:
-            // one lag of a temperature (re-estimated here), the raw non-thermal input.
-            let rival = if *thermal {
-                let ln = taus.iter().map(|t| t.ln()).sum::<f64>() / taus.len() as f64;
-                let one = refined(p, x, vec![rounded(ln.exp())]);
-                evidence_of(p, x, &one)
-            } else {
-                raw_evidence(p, x)
-            };
-            if evidence_of(p, x, &taus) < rival + STRONG {
-                return None;
-            }
-            let list = taus
+            let list = r
+                .taus
                 .iter()
                 .map(|t| minutes(*t))
                 .collect::<Vec<_>>()
                 .join(" and ");
+            // A non-thermal input the residual also follows without delay, which the model
+            // lacks, is proposed with its lags.
+            let direct = !*thermal && r.direct && !features.iter().any(|f| f == x);
+            let lags = if r.taus.len() == 1 { "a lag" } else { "lags" };
             let (kind, effect) = if *thermal {
                 (
                     EffectKind::LaggedElement,
-                    format!("{} thermal paths from {x}, {list}", taus.len()),
+                    format!("{} thermal paths from {x}, {list}", r.taus.len()),
+                )
+            } else if direct {
+                (
+                    EffectKind::NonThermal,
+                    format!("{x} acts directly and through {lags} of {list}"),
                 )
             } else {
                 (
                     EffectKind::NonThermal,
-                    format!("{x} acts through a lag of {list}"),
+                    format!("{x} acts through {lags} of {list}"),
                 )
             };
+            let expressions = direct
+                .then(|| x.clone())
+                .into_iter()
+                .chain(
+                    r.taus
+                        .iter()
+                        .map(|&t| expr::lag(expr::name(x), t).to_string()),
+                )
+                .collect();
             Some(Family {
                 members: vec![Candidate {
                     kind,
                     effect,
-                    expressions: taus
-                        .iter()
-                        .map(|&t| expr::lag(expr::name(x), t).to_string())
-                        .collect(),
-                    parameter: None,
+                    expressions,
+                    // One time constant is the parameter the bank estimated; several are named.
+                    parameter: if r.taus.len() == 1 {
+                        r.taus.first().copied()
+                    } else {
+                        None
+                    },
                     replaces: Vec::new(),
                     refines: None,
                 }],
                 search: None,
+                bank: bank(x),
             })
         })
         .collect()

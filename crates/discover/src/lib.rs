@@ -223,7 +223,7 @@ pub fn diagnose(
     }
     let src = candidates::sources(data, &exclude, &info.spec.signals);
     let mut families = candidates::generate(&src, &info.spec.features);
-    families.extend(dynamics::propose(&prepared, &src));
+    families.extend(dynamics::propose(&prepared, &src, &info.spec.features));
     let fits = families.iter().map(|f| f.members.len()).sum();
     let (mut cands, mut skipped) = score::score(&prepared, &families);
     for e in &src.outputs {
@@ -254,9 +254,9 @@ pub fn diagnose(
     // the first stage and have no searched parameter (see `placebo::RefitPlacebos`).
     let retest: Vec<usize> = (0..cands.len())
         .filter(|&i| {
-            cands
-                .get(i)
-                .is_some_and(|c| c.search.is_none() && verdict::fails_only_placebos(c))
+            cands.get(i).is_some_and(|c| {
+                c.search.is_none() && c.bank.is_empty() && verdict::fails_only_placebos(c)
+            })
         })
         .take(2)
         .collect();

@@ -172,16 +172,26 @@ fn shifts(cols: &[Vec<f64>], n: usize, k: usize) -> Vec<usize> {
 }
 
 /// Δ log evidence under AR(1) noise `rho` of the scoring design plus `cols` over the base's
-/// `base_evidence`.
-fn statistic(p: &Prepared, rho: f64, base_evidence: f64, cols: &[Vec<f64>]) -> f64 {
-    let (phi, groups, a0) = p.with_columns(cols);
+/// `base_evidence`: the columns one prior group, or with `each` one group per column (a bank, its
+/// columns switched on and off by automatic relevance determination as the bank was read).
+fn statistic(p: &Prepared, rho: f64, base_evidence: f64, cols: &[Vec<f64>], each: bool) -> f64 {
+    let (phi, mut groups, mut a0) = p.with_columns(cols);
+    if each {
+        let g = p.groups.iter().copied().max().unwrap_or(0) + 1;
+        let k = groups.len() - cols.len();
+        for (j, slot) in groups.iter_mut().skip(k).enumerate() {
+            *slot = g + j;
+        }
+        a0.resize(g + cols.len(), 1.0);
+    }
     ar1::fit(&phi, &p.y, &groups, (&a0, p.base.beta), rho)
         .map_or(f64::NEG_INFINITY, |(_, e)| e - base_evidence)
 }
 
 /// A tested candidate: its index, its column sets (at its parameter, then across its family's
-/// range) and its placebos' shifts.
-type Tested = (usize, Vec<Vec<Vec<f64>>>, Vec<usize>);
+/// range or its bank, each with whether its columns are one prior group each) and its placebos'
+/// shifts.
+type Tested = (usize, Vec<(Vec<Vec<f64>>, bool)>, Vec<usize>);
 
 /// Tests every refitted candidate of `cands` against `placebos` placebos each (0: no test) and
 /// stores the result in [`Scored::placebo`].
@@ -207,14 +217,24 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
         .filter_map(|(i, c)| {
             let (cols, _) = p.standardised(&c.expressions).ok()?;
             let s = shifts(&cols, n, placebos);
-            let mut members = vec![cols];
+            let mut members = vec![(cols, false)];
             if let Some(search) = &c.search {
                 for v in family_grid(search.lo, search.hi) {
                     let m = search.template.member(v);
                     if let Ok((cols, _)) = p.standardised(&m.expressions) {
-                        members.push(cols);
+                        members.push((cols, false));
                     }
                 }
+            }
+            if !c.bank.is_empty() {
+                // One expression at a time: a feature program holds a few features, not a bank.
+                let bank: Option<Vec<Vec<f64>>> = c
+                    .bank
+                    .iter()
+                    .map(|e| p.standardised(std::slice::from_ref(e)).ok().map(|(c, _)| c))
+                    .collect::<Option<Vec<_>>>()
+                    .map(|v| v.into_iter().flatten().collect());
+                members.extend(bank.map(|b| (b, true)));
             }
             Some((i, members, s))
         })
@@ -231,9 +251,9 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
     let stats: Vec<f64> = jobs
         .par_iter()
         .map(|&(t, m, s)| {
-            let cols = &tested[t].1[m];
+            let (cols, each) = &tested[t].1[m];
             let shifted: Vec<Vec<f64>> = cols.iter().map(|c| rolled(c, s)).collect();
-            statistic(p, rho, base_evidence, &shifted)
+            statistic(p, rho, base_evidence, &shifted, *each)
         })
         .collect();
     // Each candidate's placebo at each shift: the best member of its family there, as the

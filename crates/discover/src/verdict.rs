@@ -174,6 +174,20 @@ impl Criterion {
             if let Some(why) = &c.unconfirmed {
                 fails.push(format!("unconfirmed: {why}"));
             }
+            // A reading of a bank (`crate::dynamics`) was made on the scoring design, whose fixed
+            // Gaussians' misfit of an input the model already has a few lags of it can mimic: it
+            // is named only when the trainer's own refit with it has the more evidence too.
+            if let Some(k) = c
+                .confirmation
+                .as_ref()
+                .filter(|k| !c.bank.is_empty() && k.delta_log_evidence_refit <= 0.0)
+            {
+                fails.push(format!(
+                    "read off a bank, and the trainer's refit with it has less evidence than \
+                     without (Δ log evidence {:.1})",
+                    k.delta_log_evidence_refit
+                ));
+            }
             if self.placebos > 0 {
                 match &c.placebo {
                     Some(p) if !p.passes() => fails.push(format!(
@@ -523,6 +537,7 @@ mod tests {
             replaces: Vec::new(),
             refines: None,
             search: None,
+            bank: Vec::new(),
             estimate: None,
             parameter_scored: None,
             placebo: Some(Placebo {

@@ -95,7 +95,13 @@ fn two_thermal_paths_come_out_as_two() {
     )
     .unwrap();
     let found = dynamics::time_constants(&p, t_col);
-    let a = diagnose(&model, &sim.train, Some(&sim.verify), &DiagnoseOptions::default()).unwrap();
+    let a = diagnose(
+        &model,
+        &sim.train,
+        Some(&sim.verify),
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
     println!(
         "truth τ {truth_taus:?}; the bank reads {found:?}\nverdict {:?}: {}",
         a.diagnosis.verdict, a.diagnosis.verdict_text
@@ -106,5 +112,8 @@ fn two_thermal_paths_come_out_as_two() {
     assert_eq!(found.len(), 2, "{found:?}");
     assert!(found[1] / found[0] >= 3.0, "{found:?}");
     let fast = found[0] / truth_taus[0];
-    assert!((0.5..2.0).contains(&fast), "{found:?} against {truth_taus:?}");
+    assert!(
+        (0.5..2.0).contains(&fast),
+        "{found:?} against {truth_taus:?}"
+    );
 }
