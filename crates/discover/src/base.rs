@@ -319,6 +319,34 @@ impl Prepared {
         (phi, groups, a0)
     }
 
+    /// The binned training columns of `exprs`, as they are (not standardised).
+    pub(crate) fn binned(&self, exprs: &[String]) -> Result<Columns> {
+        compute_binned(
+            &self.signals,
+            exprs,
+            &self.data,
+            &self.time,
+            &self.starts,
+            &self.tbins,
+        )
+    }
+
+    /// Standardised training columns only (what a search over many members scores with).
+    pub(crate) fn standardised_training(&self, exprs: &[String]) -> Result<Columns> {
+        let cols = self.binned(exprs)?;
+        let mut out = Vec::with_capacity(cols.len());
+        for (e, c) in exprs.iter().zip(cols) {
+            let (m, s) = mean_sd(&c);
+            if s <= 1e-12 {
+                return Err(DiscoverError::Invalid(format!(
+                    "`{e}` is constant over the training run"
+                )));
+            }
+            out.push(c.iter().map(|v| (v - m) / s).collect());
+        }
+        Ok(out)
+    }
+
     /// Standardised training columns and, with a verification run, its columns.
     pub(crate) fn standardised(&self, exprs: &[String]) -> Result<(Columns, Option<Columns>)> {
         let time_col = self.time.clone();

@@ -116,10 +116,28 @@ pub struct Family {
     pub members: Vec<Candidate>,
     /// How the parameter is searched beyond the grid (none for a plain candidate).
     pub search: Option<Search>,
-    /// When the members were read off a bank of columns rather than a parameter's grid (the lag
-    /// bank of [`crate::dynamics`]): the bank's expressions. The placebo leg searches each
-    /// placebo's bank the same way ([`crate::placebo`]).
-    pub bank: Vec<String>,
+    /// How the member was read off the data, when it was rather than built by a template: what
+    /// each of its placebos searches the same way ([`crate::placebo`]).
+    pub searched: Searched,
+}
+
+/// How a candidate was read off the data, when not by a template's parameter.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Searched {
+    /// Not read off the data: a plain candidate, or a template's family ([`Family::search`]).
+    #[default]
+    No,
+    /// Read off a bank of columns by automatic relevance determination ([`crate::dynamics`]).
+    Bank(Vec<String>),
+    /// The best of these members by the evidence, each a set of expressions ([`crate::relay`]).
+    Grid(Vec<Vec<String>>),
+}
+
+impl Searched {
+    /// Whether the candidate was read off the data this way.
+    pub fn is_read(&self) -> bool {
+        !matches!(self, Searched::No)
+    }
 }
 
 /// What candidates are built from.
@@ -217,7 +235,7 @@ fn single(kind: EffectKind, effect: String, exprs: Vec<Expr>) -> Family {
             refines: None,
         }],
         search: None,
-        bank: Vec::new(),
+        searched: Searched::No,
     }
 }
 

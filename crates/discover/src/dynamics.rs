@@ -21,7 +21,7 @@
 //! evidence (the bank is one fit per input; only the time constants it keeps are proposed).
 
 use crate::base::Prepared;
-use crate::candidates::{Candidate, EffectKind, Family, LAG_RANGE_S, Sources};
+use crate::candidates::{Candidate, EffectKind, Family, LAG_RANGE_S, Searched, Sources};
 use crate::design::hcat;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -84,9 +84,9 @@ struct Lags<'a> {
 impl<'a> Lags<'a> {
     fn new(p: &'a Prepared, x: &'a str) -> Self {
         let raw = p
-            .standardised(&[x.to_string()])
+            .standardised_training(&[x.to_string()])
             .ok()
-            .and_then(|(c, _)| c.into_iter().next());
+            .and_then(|c| c.into_iter().next());
         Lags {
             p,
             x,
@@ -103,9 +103,9 @@ impl<'a> Lags<'a> {
             .or_insert_with(|| {
                 // One expression at a time: a feature program holds a few features, not a bank.
                 let e = expr::lag(expr::name(x), tau).to_string();
-                p.standardised(std::slice::from_ref(&e))
+                p.standardised_training(std::slice::from_ref(&e))
                     .ok()
-                    .and_then(|(c, _)| c.into_iter().next())
+                    .and_then(|c| c.into_iter().next())
             })
             .clone()
     }
@@ -315,7 +315,7 @@ pub fn propose(p: &Prepared, src: &Sources, features: &[String]) -> Vec<Family> 
                     refines: None,
                 }],
                 search: None,
-                bank: bank(x),
+                searched: Searched::Bank(bank(x)),
             })
         })
         .collect()

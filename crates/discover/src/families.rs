@@ -215,7 +215,7 @@ impl Template {
     pub fn family(self, grid: &[f64], lo: f64, hi: f64) -> crate::candidates::Family {
         crate::candidates::Family {
             members: grid.iter().map(|&p| self.member(p)).collect(),
-            bank: Vec::new(),
+            searched: crate::candidates::Searched::No,
             search: Some(Search {
                 template: self,
                 lo,

@@ -51,6 +51,7 @@
 //! The candidates tested are the refitted ones ([`crate::confirm`]), at their estimated parameters.
 
 use crate::base::Prepared;
+use crate::candidates::Searched;
 use crate::score::Scored;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -215,26 +216,36 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
         .enumerate()
         .filter(|(_, c)| c.confirmation.is_some())
         .filter_map(|(i, c)| {
-            let (cols, _) = p.standardised(&c.expressions).ok()?;
+            let cols = p.standardised_training(&c.expressions).ok()?;
             let s = shifts(&cols, n, placebos);
             let mut members = vec![(cols, false)];
             if let Some(search) = &c.search {
                 for v in family_grid(search.lo, search.hi) {
                     let m = search.template.member(v);
-                    if let Ok((cols, _)) = p.standardised(&m.expressions) {
+                    if let Ok(cols) = p.standardised_training(&m.expressions) {
                         members.push((cols, false));
                     }
                 }
             }
-            if !c.bank.is_empty() {
-                // One expression at a time: a feature program holds a few features, not a bank.
-                let bank: Option<Vec<Vec<f64>>> = c
-                    .bank
-                    .iter()
-                    .map(|e| p.standardised(std::slice::from_ref(e)).ok().map(|(c, _)| c))
-                    .collect::<Option<Vec<_>>>()
-                    .map(|v| v.into_iter().flatten().collect());
-                members.extend(bank.map(|b| (b, true)));
+            match &c.searched {
+                Searched::No => {}
+                Searched::Bank(bank) => {
+                    // One expression at a time: a feature program holds a few features, not a
+                    // bank.
+                    let cols: Option<Vec<Vec<f64>>> = bank
+                        .iter()
+                        .map(|e| p.standardised_training(std::slice::from_ref(e)).ok())
+                        .collect::<Option<Vec<_>>>()
+                        .map(|v| v.into_iter().flatten().collect());
+                    members.extend(cols.map(|b| (b, true)));
+                }
+                Searched::Grid(grid) => {
+                    for m in grid {
+                        if let Ok(cols) = p.standardised_training(m) {
+                            members.push((cols, false));
+                        }
+                    }
+                }
             }
             Some((i, members, s))
         })

@@ -145,9 +145,9 @@ pub struct Scored {
     /// How the family's parameter is searched ([`crate::param`]).
     #[serde(skip)]
     pub search: Option<Search>,
-    /// The bank the candidate was read off, when it was ([`crate::candidates::Family::bank`]).
+    /// How the candidate was read off the data, when it was ([`crate::candidates::Searched`]).
     #[serde(skip)]
-    pub bank: Vec<String>,
+    pub searched: crate::candidates::Searched,
     /// The estimate of the parameter, when it was searched.
     pub estimate: Option<crate::param::Estimate>,
     /// The scoring grid's best parameter, when the estimate moved away from it.
@@ -292,7 +292,10 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             replaces: best_c.replaces.clone(),
             refines: best_c.refines.clone(),
             search: families.get(f).and_then(|x| x.search.clone()),
-            bank: families.get(f).map(|x| x.bank.clone()).unwrap_or_default(),
+            searched: families
+                .get(f)
+                .map(|x| x.searched.clone())
+                .unwrap_or_default(),
             estimate: None,
             parameter_scored: None,
             placebo: None,

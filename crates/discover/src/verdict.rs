@@ -174,16 +174,17 @@ impl Criterion {
             if let Some(why) = &c.unconfirmed {
                 fails.push(format!("unconfirmed: {why}"));
             }
-            // A reading of a bank (`crate::dynamics`) was made on the scoring design, whose fixed
-            // Gaussians' misfit of an input the model already has a few lags of it can mimic: it
-            // is named only when the trainer's own refit with it has the more evidence too.
+            // A candidate read off the data (a bank of lags, a grid of relays) was read on the
+            // scoring design, whose fixed Gaussians' misfit of an input the model already has a
+            // few lags of it can mimic: it is named only when the trainer's own refit with it has
+            // the more evidence too.
             if let Some(k) = c
                 .confirmation
                 .as_ref()
-                .filter(|k| !c.bank.is_empty() && k.delta_log_evidence_refit <= 0.0)
+                .filter(|k| c.searched.is_read() && k.delta_log_evidence_refit <= 0.0)
             {
                 fails.push(format!(
-                    "read off a bank, and the trainer's refit with it has less evidence than \
+                    "read off the data, and the trainer's refit with it has less evidence than \
                      without (Δ log evidence {:.1})",
                     k.delta_log_evidence_refit
                 ));
@@ -537,7 +538,7 @@ mod tests {
             replaces: Vec::new(),
             refines: None,
             search: None,
-            bank: Vec::new(),
+            searched: crate::candidates::Searched::No,
             estimate: None,
             parameter_scored: None,
             placebo: Some(Placebo {

@@ -633,3 +633,85 @@ fn an_input_through_a_lag() {
     // what it reaches.
     assert!(after <= AFTER_TARGET * limit.max(1.0), "{text}");
 }
+
+/// A mode hop: the bias steps up when the temperature rises past one point and back down when it
+/// falls past another, lower one (a relay on the shifted temperature, both switching points
+/// unknown). The model has the thermal terms.
+#[test]
+fn a_mode_hop_with_two_switching_points() {
+    let case = base_case(
+        presets::with_effects(SensorKind::Qma, &[EffectKind::Poly, EffectKind::Rate])
+            .unwrap()
+            .with_seed(28),
+        &[],
+    );
+    let t = case.sim.train.column("t_qma_c").unwrap();
+    let (lo, hi) = t
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(*v), h.max(*v))
+        });
+    // Up at 60 % of the range, down at 35 %.
+    let (up, down) = (lo + 0.6 * (hi - lo), lo + 0.35 * (hi - lo));
+    let (c, h) = (
+        ((up + down) / 2.0 * 10.0).round() / 10.0,
+        ((up - down) / 2.0 * 10.0).round() / 10.0,
+    );
+    let e = format!("hyst(t_qma_c - {c}, {h})");
+    let k = scaled(&case, &e, 6.0);
+    let case = with_injected(case, &[(k, e.clone())]);
+    let o = run(&case);
+    println!(
+        "truth {e}: switches at {} heating, {} cooling\n{}",
+        c + h,
+        c - h,
+        o.text
+    );
+    // The relay read off the training run: each true switching point inside the interval its
+    // evidence cannot tell apart.
+    let relay = o
+        .diagnosis
+        .candidates
+        .iter()
+        .find(|c| c.effect.starts_with("bias switches at t_qma_c"))
+        .unwrap_or_else(|| panic!("no relay on t_qma_c read\n{}", o.text));
+    let between = |name: &str| -> [f64; 2] {
+        // "… ≈ 9.6 (-0.4 … 19.6) on heating …": the interval after the point named.
+        let tail = relay.effect.split(name).next().unwrap_or("");
+        let open = tail.rfind('(').unwrap();
+        let inner = &tail[open + 1..tail.rfind(')').unwrap()];
+        let mut it = inner.split(" … ").map(|v| v.trim().parse::<f64>().unwrap());
+        [it.next().unwrap(), it.next().unwrap()]
+    };
+    let (up, down) = (between(" on heating"), between(" on cooling"));
+    println!(
+        "read: up {up:?}, down {down:?}; truth {} / {}",
+        c + h,
+        c - h
+    );
+    let tol = 0.05 * (hi - lo);
+    assert!(up[0] - tol <= c + h && c + h <= up[1] + tol, "{}", o.text);
+    assert!(
+        down[0] - tol <= c - h && c - h <= down[1] + tol,
+        "{}",
+        o.text
+    );
+    // The verdict: this relay, or — where the run cannot tell — not another effect.
+    match o.diagnosis.verdict {
+        Verdict::MissingEffect => {
+            let top = o.top();
+            assert_eq!(top.kind, EffectKind::Hysteresis, "{}", o.text);
+            let features = top.candidate().applied_to(&case.base);
+            let after = after_ratio(&case, &features);
+            let limit = limit_ratio(&case);
+            let text = format!(
+                "{}  after {features:?}: {after:.2}× the floor (limit, least squares on the truth \
+                 form: {limit:.2}×)",
+                o.text
+            );
+            println!("{text}");
+            assert!(after <= AFTER_TARGET * limit.max(1.0), "{text}");
+        }
+        Verdict::CannotTell | Verdict::None => {}
+    }
+}
