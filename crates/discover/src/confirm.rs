@@ -177,7 +177,7 @@ impl<'a> Refits<'a> {
 
     /// Log evidence of the trainer's refit of `features` on the whole training run (−∞ when it
     /// fails).
-    fn log_evidence(&self, features: &[String]) -> f64 {
+    pub(crate) fn log_evidence(&self, features: &[String]) -> f64 {
         tcomp_train::fit(self.data, &self.options(features))
             .ok()
             .and_then(|f| f.summary.details.evidence.map(|e| e.log_evidence))

@@ -32,6 +32,7 @@ mod design;
 pub mod dynamics;
 pub mod error;
 pub mod families;
+pub mod joint;
 pub mod param;
 pub mod placebo;
 pub mod program;

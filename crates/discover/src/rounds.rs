@@ -9,6 +9,10 @@
 //! and features with the candidate applied (added, or put in place of the features it replaces),
 //! the same roles and gap threshold. A refinement (the model's rate with another window) is not a
 //! missing effect: it ends the loop like "none" does, with its advice in the last verdict.
+//!
+//! After each round, before the next one (and so at the end), the parameters of every feature
+//! the rounds added are re-estimated together against the first round's scoring design
+//! ([`crate::joint`]): a round's estimate was made with the later effects missing.
 
 use crate::confirm::Refits;
 use crate::verdict::Verdict;
@@ -32,6 +36,9 @@ pub struct Applied {
     pub replaces: Vec<String>,
     /// The features of the model the next round starts from.
     pub features: Vec<String>,
+    /// The added features whose parameters moved when every added parameter was re-estimated
+    /// together after this round ([`crate::joint`]).
+    pub reestimated: Vec<crate::joint::Moved>,
 }
 
 /// Every round's diagnosis and what was added after each.
@@ -88,6 +95,8 @@ pub fn diagnose_rounds(
     let info = model_info(model);
     let roles = opts.roles.clone().unwrap_or_else(|| info.roles.clone());
     let mut analyses = vec![diagnose(model, data, verify, opts)?];
+    // The first round's scoring design: what the added parameters are re-estimated against.
+    let first = crate::score::prepare(&info.spec, &roles, data, None, &opts.score)?;
     let mut applied = Vec::new();
     let mut features = info.spec.features.clone();
     let stopped = loop {
@@ -118,6 +127,12 @@ pub fn diagnose_rounds(
             }
         };
         let next = c.candidate().applied_to(&features);
+        // Every parameter the rounds added, re-estimated together before the next round (and so
+        // at the end).
+        let added: Vec<usize> = (0..next.len())
+            .filter(|&k| next.get(k).is_some_and(|f| !info.spec.features.contains(f)))
+            .collect();
+        let (next, reestimated) = crate::joint::reestimate(&first, &next, &added);
         applied.push(Applied {
             round: analyses.len(),
             effect: c.effect.clone(),
@@ -125,6 +140,7 @@ pub fn diagnose_rounds(
             expressions: c.expressions.clone(),
             replaces: c.replaces.clone(),
             features: next.clone(),
+            reestimated,
         });
         features = next;
         if analyses.len() >= max_rounds {

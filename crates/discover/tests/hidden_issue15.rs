@@ -359,6 +359,54 @@ fn lag_in_every_term() {
     check_parameter(&o, tau, 0.2);
 }
 
+/// Two effects a QMA's model lacks — a lagged element (τ = 40 min) and a warm-up after power-on
+/// (τ = 15 min) — put in at wrong parameters (as rounds that each estimated one with the other missing
+/// might leave them): re-estimated together, both come back to the truth.
+#[test]
+fn added_parameters_are_reestimated_together() {
+    let (tau, warm) = (2400.0, 900.0);
+    let case = base_case(
+        presets::with_effects(SensorKind::Qma, &[EffectKind::Poly])
+            .unwrap()
+            .with_seed(29),
+        &[],
+    );
+    let lagged = format!("lag(t_qma_c, {tau})");
+    let warmup = format!("warmup({warm})");
+    let terms = vec![
+        (scaled(&case, &lagged, 8.0), lagged),
+        (scaled(&case, &warmup, 6.0), warmup),
+    ];
+    let case = with_injected(case, &terms);
+    let fitted = fit(&case, &case.base);
+    let bytes = fitted.model.to_bytes().unwrap();
+    let model = tcomp_train::blob_io::decode("m.tcm".as_ref(), &bytes).unwrap();
+    let mut wrong = case.base.clone();
+    let n = wrong.len();
+    wrong.push("lag(t_qma_c, 900)".into());
+    wrong.push("warmup(300)".into());
+    let (after, moved) = tcomp_discover::joint::reestimate_added(
+        &model,
+        &case.sim.train,
+        &wrong,
+        &[n, n + 1],
+        &options(&case).score,
+    )
+    .unwrap();
+    println!("{wrong:?} → {after:?}: {moved:?}");
+    for (f, truth) in after[n..].iter().zip([tau, warm]) {
+        let p = tcomp_discover::joint::params_of(0, f);
+        assert_eq!(p.len(), 1, "{f}");
+        assert!(
+            (p[0].value / truth - 1.0).abs() <= 0.25,
+            "{wrong:?} → {after:?}"
+        );
+    }
+    let (r0, r1) = (after_ratio(&case, &wrong), after_ratio(&case, &after));
+    println!("verification: {r0:.2}× before, {r1:.2}× after");
+    assert!(r1 < r0);
+}
+
 /// An RLG whose bias follows the rate of its anode−shell gradient (4× the noise floor).
 #[test]
 fn rate_of_a_gradient() {

@@ -217,6 +217,15 @@ fn run_rounds(args: &Args) -> anyhow::Result<()> {
             crate::output::printable::lines(&crate::render::diagnosis::text(a, args.top))
         );
         if let Some(x) = r.applied.iter().find(|x| x.round == k + 1) {
+            for m in &x.reestimated {
+                outln!(
+                    "re-estimated with every added parameter (trainer's refit evidence {:+.1}): \
+                     {} → {}",
+                    m.delta_log_evidence,
+                    crate::output::printable::lines(&m.from),
+                    crate::output::printable::lines(&m.to)
+                );
+            }
             outln!(
                 "round {} adds {}: the next round starts from a refit with --feature {}",
                 x.round,
