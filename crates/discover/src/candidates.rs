@@ -129,8 +129,6 @@ pub enum Searched {
     No,
     /// Read off a bank of columns by automatic relevance determination ([`crate::dynamics`]).
     Bank(Vec<String>),
-    /// The best of these members by the evidence, each a set of expressions ([`crate::relay`]).
-    Grid(Vec<Vec<String>>),
 }
 
 impl Searched {

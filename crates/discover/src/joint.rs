@@ -103,7 +103,8 @@ fn last_argument(s: &str, open: usize, close: usize) -> (usize, usize) {
 
 /// The searchable parameters of feature `k`, `e`: the last argument of `lag(…, τ)`,
 /// `rate(…, w)`, `hyst(rate(…), h)` and the argument of `warmup(τ)`, where it is a plain number.
-/// (A relay on a shifted input, `hyst(x − c, h)`, is read off its own profile, [`crate::relay`].)
+/// (A relay on a shifted input, `hyst(x − c, h)`, has two parameters that move together; it is
+/// left where it is.)
 pub fn params_of(k: usize, e: &str) -> Vec<Param> {
     let mut out = Vec::new();
     let ident = |c: char| c.is_ascii_alphanumeric() || c == '_';

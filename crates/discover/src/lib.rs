@@ -5,7 +5,6 @@
 //! Modules: [`segments`] (where it fails: warm-up, holds, ramps, bands, worst intervals),
 //! [`candidates`] (which effects could be missing, with physical names and ready expressions),
 //! [`dynamics`] (through how many lags, and which, the residual responds to each input),
-//! [`relay`] (where, on the way up and on the way down, the bias steps with an input),
 //! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual, against
 //! the base model `base` prepares once from the columns and transform of `design`),
 //! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`confirm`] (the
@@ -36,7 +35,6 @@ pub mod joint;
 pub mod param;
 pub mod placebo;
 pub mod program;
-pub mod relay;
 pub mod rounds;
 pub mod score;
 pub mod segments;
@@ -227,7 +225,6 @@ pub fn diagnose(
     let src = candidates::sources(data, &exclude, &info.spec.signals);
     let mut families = candidates::generate(&src, &info.spec.features);
     families.extend(dynamics::propose(&prepared, &src, &info.spec.features));
-    families.extend(relay::propose(&prepared, &src));
     let fits = families.iter().map(|f| f.members.len()).sum();
     let (mut cands, mut skipped) = score::score(&prepared, &families);
     for e in &src.outputs {

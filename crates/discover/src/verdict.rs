@@ -174,10 +174,10 @@ impl Criterion {
             if let Some(why) = &c.unconfirmed {
                 fails.push(format!("unconfirmed: {why}"));
             }
-            // A candidate read off the data (a bank of lags, a grid of relays) was read on the
-            // scoring design, whose fixed Gaussians' misfit of an input the model already has a
-            // few lags of it can mimic: it is named only when the trainer's own refit with it has
-            // the more evidence too.
+            // A candidate read off the data (a bank of lags) was read on the scoring design, whose
+            // fixed Gaussians' misfit of an input the model already has a few lags of it can
+            // mimic: it is named only when the trainer's own refit with it has the more evidence
+            // too.
             if let Some(k) = c
                 .confirmation
                 .as_ref()

@@ -7,7 +7,14 @@
 //!   thermometer lagging the coil by 15 min, a fan duty proportional to it) and act on nothing;
 //! - `drift`: the QMA preset with a slow non-thermal drift added to the output (a random walk,
 //!   Gauss–Markov with a 3-hour correlation time, stationary from the first sample, 3× the noise
-//!   floor) that no input explains.
+//!   floor) that no input explains;
+//! - `drift_lagging`: the same drift, and a case thermometer `t_case_c` that follows the chamber
+//!   through a 20-minute lag and acts on nothing;
+//! - `idle_input`: the RLG preset with an auxiliary input `heater_v` that wanders on its own (a
+//!   Gauss–Markov wander of 1-hour correlation time) and acts on nothing.
+//!
+//! `drift_lagging` and `idle_input` were added after the rest of the design was fixed: their
+//! first run is their measurement.
 //!
 //! `cargo test --release -p tcomp-discover --test false_discoveries -- --nocapture` runs 20 seeds
 //! of each control from 9000 (the set run once, to report, after the placebo leg was designed;
@@ -122,7 +129,13 @@ fn negative_controls_rarely_name_an_effect() {
     let seeds = env("SEEDS", 20);
     let first = env("FIRST", 9000);
     let mut rates = Vec::new();
-    for control in ["plain", "distractors", "drift"] {
+    for control in [
+        "plain",
+        "distractors",
+        "drift",
+        "drift_lagging",
+        "idle_input",
+    ] {
         let (mut missing, mut cannot) = (0, 0);
         for s in 0..seeds {
             let seed = first + s;
@@ -151,9 +164,25 @@ fn negative_controls_rarely_name_an_effect() {
                     }
                     sim
                 }
+                "idle_input" => {
+                    let mut sim =
+                        simulated(&presets::preset("rlg").unwrap().with_seed(seed)).unwrap();
+                    for (d, k) in [(&mut sim.train, 1u64), (&mut sim.verify, 2u64)] {
+                        let w = drift(d.len(), 3600.0, 0.3, seed * 11 + k);
+                        let heater: Vec<f64> = w.iter().map(|v| 12.0 + v).collect();
+                        *d = with_columns(d, &[("heater_v", heater)]);
+                    }
+                    sim
+                }
                 _ => {
                     let mut sim =
                         simulated(&presets::preset("qma").unwrap().with_seed(seed)).unwrap();
+                    if control == "drift_lagging" {
+                        for d in [&mut sim.train, &mut sim.verify] {
+                            let air = d.column("t_chamber_c").unwrap().to_vec();
+                            *d = with_columns(d, &[("t_case_c", lag(&air, 1200.0))]);
+                        }
+                    }
                     let floor = sim.verify_truth.noise.std_100s;
                     let target = sim.train_truth.columns.target.clone();
                     for (d, k) in [(&mut sim.train, 1u64), (&mut sim.verify, 2u64)] {
