@@ -6,15 +6,21 @@
 //! and a non-thermal input whose effect arrives through a lag is named raw. Here the data say how
 //! many time constants there are and where.
 //!
-//! How: a bank of `lag(x, τ)` columns at [`BANK`] log-spaced τ over the lag families' range is
-//! added to the scoring design (the base model's Gaussians fixed, [`crate::score`]), every column
-//! with its own prior precision — automatic relevance determination by MacKay's evidence: a τ the
-//! residual does not respond through is switched off. The columns that stay on, grouped where they
-//! are neighbours on the grid, are the time constants; each group's τ is the geometric mean of its
-//! members weighted by their weights' sizes. Two groups or more on a temperature propose "thermal
-//! paths from x, τ ≈ a and b" (one group is what the lag families already find); one group or more
-//! on a non-thermal input propose "x acts through a lag of τ ≈ a". The proposals are then scored,
-//! refitted, placebo-tested and judged like every other candidate: this module only proposes.
+//! How: a bank — `x` itself and `lag(x, τ)` at [`BANK`] log-spaced τ over the lag families'
+//! range — is added to the scoring design (the base model's Gaussians fixed, [`crate::score`]),
+//! every column with its own prior precision: automatic relevance determination by MacKay's
+//! evidence switches off a τ the residual does not respond through. `x` itself is in the bank so
+//! that a response without delay (or the model's own misfit of an input it already has) is not
+//! read as a lag. The lag columns that stay on, grouped where they are neighbours on the grid, are
+//! the time constants; each group's τ is the geometric mean of its members weighted by their
+//! weights' sizes, and the time constants are then refined together (`refined`: golden-section
+//! search of the evidence, one τ at a time). Two or more on a temperature propose "thermal paths
+//! from x, τ ≈ a and b" (one is what the lag families already find); one or more on a non-thermal
+//! input propose "x acts through a lag of τ ≈ a" (with `x` itself when its column stays on and the
+//! model lacks it). The proposals are then scored, refitted, placebo-tested — each placebo the
+//! bank's own reading of the shifted bank ([`crate::candidates::Searched::Bank`]) — and judged
+//! like every other candidate, with one more leg: the trainer's refit with a bank's reading must
+//! have more evidence than without it ([`crate::verdict`]). This module only proposes.
 //!
 //! Pruned by physics (only the sensor's temperatures and its non-thermal inputs, never the
 //! chamber's air or another inertial output — [`crate::candidates::Sources`] has sorted them) and by
@@ -60,7 +66,7 @@ fn minutes(tau: f64) -> String {
 }
 
 /// The bank over `x`: `x` itself (a response without delay), then `lag(x, τ)` at every τ of
-/// [`taus`].
+/// `taus`.
 pub fn bank(x: &str) -> Vec<String> {
     std::iter::once(x.to_string())
         .chain(
