@@ -32,7 +32,8 @@ pub struct Args {
     #[arg(long, default_value_t = 5.0, allow_negative_numbers = true, value_parser = crate::args::check::percent)]
     pub min_improvement: f64,
     /// Placebos each candidate must beat: its columns shifted in time, the threshold the best of
-    /// them (false-alarm rate 1 / (N + 1)); 0 turns the leg off.
+    /// them (false-alarm rate 1 / (N + 1) a stage, at most 2 / (N + 1) over the two stages); 0
+    /// turns the leg off.
     #[arg(long, default_value_t = tcomp_discover::placebo::PLACEBOS, allow_negative_numbers = true, value_parser = crate::args::check::placebos)]
     pub placebos: usize,
     /// Candidates printed.
