@@ -4,10 +4,10 @@
 //! A serial link loses bytes (a receiver overrun, a cable unplugged mid-frame) and a host may start
 //! listening in the middle of a frame, so every frame starts with a sync word, carries a sequence
 //! number (a gap says how many frames were lost) and ends with a CRC (a corrupt frame is dropped,
-//! never half-used). The decoder is the core's sync-word [`Framer`](crate::framer::Framer) (shared
-//! with the update protocol's frames): after any garbage or a failed CRC it searches for the next
-//! sync word from the byte after the one it had taken for a frame start, so one corrupt frame
-//! costs at most that frame. This module only says how long a frame is and what its bytes mean.
+//! never half-used). The decoder is the core's sync-word [`Framer`] (shared with the update
+//! protocol's frames): after any garbage or a failed CRC it searches for the next sync word from
+//! the byte after the one it had taken for a frame start, so one corrupt frame costs at most that
+//! frame. This module only says how long a frame is and what its bytes mean.
 //!
 //! # Layout (little-endian)
 //!
