@@ -4,9 +4,10 @@
 //! A serial link loses bytes (a receiver overrun, a cable unplugged mid-frame) and a host may start
 //! listening in the middle of a frame, so every frame starts with a sync word, carries a sequence
 //! number (a gap says how many frames were lost) and ends with a CRC (a corrupt frame is dropped,
-//! never half-used). The decoder is a byte-at-a-time state machine that, after any garbage or a
-//! failed CRC, searches for the next sync word from the byte after the one it had taken for a frame
-//! start, so one corrupt frame costs at most that frame.
+//! never half-used). The decoder is the core's sync-word [`Framer`] (shared with the update
+//! protocol's frames): after any garbage or a failed CRC it searches for the next sync word from
+//! the byte after the one it had taken for a frame start, so one corrupt frame costs at most that
+//! frame. This module only says how long a frame is and what its bytes mean.
 //!
 //! # Layout (little-endian)
 //!
@@ -49,6 +50,7 @@
 //! f32 `0x7FC0_0000`), whatever NaN the arithmetic produced, so host and ARM frames are bit-identical.
 
 use crate::crc::crc32;
+use crate::framer::{Framer, Framing};
 
 mod boot;
 pub use boot::{
@@ -256,14 +258,9 @@ impl Frame {
         Ok(len)
     }
 
-    /// Parses one complete frame at the start of `bytes` (sync, header, CRC all checked).
+    /// Reads a frame whose sync word, version, channel count, length and CRC the framer checked.
     fn parse(bytes: &[u8]) -> Option<Self> {
         let k = usize::from(*bytes.get(3)?);
-        let body = bytes.get(..frame_len(k) - CRC_LEN)?;
-        let crc = le_u32(bytes, frame_len(k) - CRC_LEN)?;
-        if crc32(body.get(SYNC.len()..)?) != crc {
-            return None;
-        }
         let mut channels = [ChannelOutput::default(); MAX_CHANNELS];
         for (i, c) in channels.iter_mut().enumerate().take(k) {
             let at = HEADER_LEN + CHANNEL_LEN * i;
@@ -319,13 +316,34 @@ pub struct Stats {
     pub restarts: u64,
 }
 
+/// The output link's framing: data frames and boot reports share the sync word and are told apart
+/// by their version byte, which with the channel count gives the length.
+#[derive(Clone, Copy, Debug, Default)]
+struct Output;
+
+impl Framing for Output {
+    const SYNC: &'static [u8] = &SYNC;
+    /// Sync word, version, channel count.
+    const HEADER_LEN: usize = 4;
+
+    fn frame_len(header: &[u8]) -> Option<usize> {
+        let k = usize::from(*header.get(3)?);
+        match *header.get(2)? {
+            BOOT_VERSION if k <= MAX_CHANNELS => Some(boot_len(k)),
+            VERSION if (1..=MAX_CHANNELS).contains(&k) => Some(frame_len(k)),
+            _ => None,
+        }
+    }
+}
+
 /// Streaming decoder: feed it bytes as they arrive, in any chunks.
 #[derive(Clone, Debug)]
 pub struct Decoder {
-    buf: [u8; MAX_FRAME_LEN],
-    len: usize,
+    framer: Framer<Output, MAX_FRAME_LEN>,
     next_sequence: Option<u32>,
-    stats: Stats,
+    frames: u64,
+    lost: u64,
+    restarts: u64,
     boot_reports: u64,
 }
 
@@ -344,34 +362,24 @@ pub enum Item {
     Boot(BootReport),
 }
 
-/// What the bytes at the start of the buffer are.
-enum Candidate {
-    /// Not enough bytes to tell.
-    Incomplete,
-    /// Not a frame start: drop the first byte and look again.
-    NoFrame,
-    /// A frame start of `len` bytes whose CRC failed.
-    Corrupt,
-    /// A good frame of `len` bytes.
-    Good(Frame, usize),
-    /// A good boot report of `len` bytes.
-    Boot(BootReport, usize),
+/// The item of a frame the framer checked ([`Output::frame_len`] and the CRC): cannot fail.
+fn parse(bytes: &[u8]) -> Option<Item> {
+    if bytes.get(2) == Some(&BOOT_VERSION) {
+        BootReport::parse(bytes).map(Item::Boot)
+    } else {
+        Frame::parse(bytes).map(Item::Data)
+    }
 }
 
 impl Decoder {
     /// A decoder that has seen nothing.
     pub const fn new() -> Self {
         Self {
-            buf: [0; MAX_FRAME_LEN],
-            len: 0,
+            framer: Framer::new(),
             next_sequence: None,
-            stats: Stats {
-                frames: 0,
-                lost: 0,
-                corrupt: 0,
-                skipped: 0,
-                restarts: 0,
-            },
+            frames: 0,
+            lost: 0,
+            restarts: 0,
             boot_reports: 0,
         }
     }
@@ -385,23 +393,23 @@ impl Decoder {
     /// them, in order.
     pub fn feed_items(&mut self, bytes: &[u8], mut on_item: impl FnMut(Item)) {
         for &b in bytes {
-            if self.len >= self.buf.len() {
-                self.drop_front(1);
-                self.stats.skipped += 1;
-            }
-            if let Some(slot) = self.buf.get_mut(self.len) {
-                *slot = b;
-                self.len += 1;
-            }
-            while let Some(item) = self.poll_item() {
-                on_item(item);
+            let mut item = self.push_item(b);
+            while let Some(i) = item {
+                on_item(i);
+                item = self.poll_item();
             }
         }
     }
 
     /// Counters so far.
     pub const fn stats(&self) -> Stats {
-        self.stats
+        Stats {
+            frames: self.frames,
+            lost: self.lost,
+            corrupt: self.framer.corrupt(),
+            skipped: self.framer.skipped(),
+            restarts: self.restarts,
+        }
     }
 
     /// Feeds `bytes`, calling `on_frame` for every good frame completed by them, in order.
@@ -420,16 +428,10 @@ impl Decoder {
     /// [`poll`](Self::poll) until `None` before the next byte (a resynchronisation can leave a
     /// second complete frame in the buffer); [`feed`](Self::feed) does both.
     pub fn push(&mut self, byte: u8) -> Option<Frame> {
-        if self.len >= self.buf.len() {
-            // Cannot happen: a candidate never outgrows the longest frame. Drop the oldest byte.
-            self.drop_front(1);
-            self.stats.skipped += 1;
+        match self.push_item(byte)? {
+            Item::Data(f) => Some(f),
+            Item::Boot(_) => self.poll(),
         }
-        if let Some(slot) = self.buf.get_mut(self.len) {
-            *slot = byte;
-            self.len += 1;
-        }
-        self.poll()
     }
 
     /// Looks for a complete data frame in the bytes already fed (boot reports on the way are
@@ -443,84 +445,34 @@ impl Decoder {
         }
     }
 
-    /// Looks for a complete data frame or boot report in the bytes already fed.
+    /// Feeds one byte; returns the data frame or boot report it completes, counted.
+    fn push_item(&mut self, byte: u8) -> Option<Item> {
+        let item = self.framer.push(byte).and_then(parse)?;
+        Some(self.counted(item))
+    }
+
+    /// Looks for a complete data frame or boot report in the bytes already fed, counted.
     fn poll_item(&mut self) -> Option<Item> {
-        loop {
-            match self.candidate() {
-                Candidate::Incomplete => return None,
-                Candidate::NoFrame => {
-                    self.drop_front(1);
-                    self.stats.skipped += 1;
-                }
-                Candidate::Corrupt => {
-                    // Resynchronise from the byte after this false or damaged start.
-                    self.drop_front(1);
-                    self.stats.corrupt += 1;
-                    self.stats.skipped += 1;
-                }
-                Candidate::Good(frame, len) => {
-                    self.drop_front(len);
-                    self.count(frame.sequence);
-                    return Some(Item::Data(frame));
-                }
-                Candidate::Boot(report, len) => {
-                    self.drop_front(len);
-                    self.boot_reports += 1;
-                    return Some(Item::Boot(report));
-                }
-            }
-        }
+        let item = self.framer.poll().and_then(parse)?;
+        Some(self.counted(item))
     }
 
-    fn candidate(&self) -> Candidate {
-        let bytes = self.buf.get(..self.len).unwrap_or(&[]);
-        for (i, s) in SYNC.iter().enumerate() {
-            match bytes.get(i) {
-                None => return Candidate::Incomplete,
-                Some(b) if b != s => return Candidate::NoFrame,
-                Some(_) => {}
-            }
+    fn counted(&mut self, item: Item) -> Item {
+        match item {
+            Item::Data(f) => self.count(f.sequence),
+            Item::Boot(_) => self.boot_reports += 1,
         }
-        let (Some(&version), Some(&k)) = (bytes.get(2), bytes.get(3)) else {
-            return Candidate::Incomplete;
-        };
-        if version == BOOT_VERSION && usize::from(k) <= MAX_CHANNELS {
-            let len = boot_len(usize::from(k));
-            if bytes.len() < len {
-                return Candidate::Incomplete;
-            }
-            return match BootReport::parse(bytes) {
-                Some(r) => Candidate::Boot(r, len),
-                None => Candidate::Corrupt,
-            };
-        }
-        if version != VERSION || k == 0 || usize::from(k) > MAX_CHANNELS {
-            return Candidate::NoFrame;
-        }
-        let len = frame_len(usize::from(k));
-        if bytes.len() < len {
-            return Candidate::Incomplete;
-        }
-        match Frame::parse(bytes) {
-            Some(f) => Candidate::Good(f, len),
-            None => Candidate::Corrupt,
-        }
-    }
-
-    fn drop_front(&mut self, n: usize) {
-        let n = n.min(self.len);
-        self.buf.copy_within(n..self.len, 0);
-        self.len -= n;
+        item
     }
 
     fn count(&mut self, sequence: u32) {
-        self.stats.frames += 1;
+        self.frames += 1;
         if let Some(expected) = self.next_sequence {
             let gap = sequence.wrapping_sub(expected);
             if gap <= i32::MAX as u32 {
-                self.stats.lost += u64::from(gap);
+                self.lost += u64::from(gap);
             } else {
-                self.stats.restarts += 1;
+                self.restarts += 1;
             }
         }
         self.next_sequence = Some(sequence.wrapping_add(1));

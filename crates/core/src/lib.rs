@@ -21,6 +21,8 @@
 //!   `step(inputs, raw) → (compensated, status)`.
 //!
 //! [`frame`] is the output frame the firmware sends per sample and the host decodes.
+//! [`framer`] is the one sync-word frame decoder, under both the output frames and the update
+//! protocol's.
 //! [`slots`] keeps the model image in two flash slots (A/B) with a commit marker written last, and
 //! [`update`] is the framed protocol and the unit's receiver that replace an image over the serial
 //! link through them.
@@ -42,6 +44,7 @@ pub mod eval;
 pub mod expr;
 pub mod fastexp;
 pub mod frame;
+pub mod framer;
 pub mod image;
 pub mod lang;
 pub mod parse;

@@ -534,6 +534,40 @@ proptest! {
     }
 }
 
+/// The longest frame (a whole DATA chunk) decodes; a header promising a longer payload is no
+/// frame start and a request with a corrupt CRC costs that request only: the good one after
+/// both is found, and every byte before it is counted as skipped.
+#[test]
+fn the_longest_frame_decodes_after_a_longer_header_and_a_corrupt_frame() {
+    use tcomp_core::update::wire::{MAX_PAYLOAD, SYNC};
+    let payload = [0x5Au8; MAX_PAYLOAD];
+    let mut good = [0u8; MAX_FRAME];
+    let packet = Packet {
+        kind: Kind::Data,
+        seq: 9,
+        payload: &payload,
+    };
+    assert_eq!(packet.encode(&mut good), Some(MAX_FRAME));
+    let mut bad = good;
+    bad[20] ^= 0x04;
+    let mut stream = vec![SYNC[0], SYNC[1], Kind::Data as u8, 0, 0];
+    stream.extend(((MAX_PAYLOAD + 1) as u16).to_le_bytes());
+    stream.extend(bad);
+    stream.extend(good);
+    let mut d = Decoder::new();
+    let mut found = Vec::new();
+    for b in stream {
+        if let Some(p) = d.push(b) {
+            found.push((p.kind, p.seq, p.payload.to_vec()));
+        }
+        while let Some(p) = d.poll() {
+            found.push((p.kind, p.seq, p.payload.to_vec()));
+        }
+    }
+    assert_eq!(found, [(Kind::Data, 9, payload.to_vec())]);
+    assert_eq!(d.skipped() as usize, 7 + MAX_FRAME);
+}
+
 /// A flash that fails mid-update (here: the power model's cut, seen by the receiver as an error)
 /// is reported as a NAK, and the next BEGIN starts over on the same inactive slot.
 #[test]

@@ -1,5 +1,5 @@
 //! Figures of merit, always measured by running the *decoded blob* through the core's f32
-//! [`Channel`] — what flies is what is measured.
+//! [`Channel`](tcomp_core::Channel) — what flies is what is measured.
 //!
 //! Why one module: `fit` (training residual), `eval` and the tests must report the same numbers the
 //! same way. Error = target − reference; residual = compensated − reference. Reported: raw and
@@ -11,13 +11,12 @@
 use crate::dataset::{Dataset, segments};
 
 pub mod online;
+pub(crate) mod step;
 #[cfg(test)]
 mod two_pass;
 use crate::error::TrainError;
-use crate::features::N;
-use crate::rbf64::C;
 use serde::Serialize;
-use tcomp_core::{Channel, HostModel, Model, Status};
+use tcomp_core::{HostModel, Model};
 
 /// Which columns play which role when evaluating.
 #[derive(Clone, Debug, Default)]
@@ -103,7 +102,7 @@ impl Run {
     }
 }
 
-/// Runs the model through a core [`Channel`] over `data`, carrying the feature state across gaps
+/// Runs the model through a core [`Channel`](tcomp_core::Channel) over `data`, carrying the feature state across gaps
 /// as the board does across missed periods (see [`crate::features`]). `temperature` names the
 /// column used for segment detection (default: the program's first input).
 ///
@@ -119,18 +118,31 @@ pub fn run_model(
     temperature: Option<&str>,
     gap_s: Option<f64>,
 ) -> Result<Run, TrainError> {
-    if usize::from(model.rbf.n_features) <= crate::features::FLIGHT_FEATURES {
-        let mut buf = vec![0u8; crate::blob_io::MAX_BLOB];
-        let narrow = model
-            .encode(&mut buf)
-            .ok()
-            .and_then(|len| buf.get(..len))
-            .and_then(|b| Model::<'_, C, { crate::features::FLIGHT_FEATURES }, N>::decode(b).ok());
-        if let Some(m) = narrow {
-            return run_at_capacity(&m, data, roles, temperature, gap_s);
+    /// [`run_at_capacity`] with its arguments, for [`step::in_flight_capacity`].
+    struct RunAt<'d> {
+        data: &'d Dataset,
+        roles: &'d Roles,
+        temperature: Option<&'d str>,
+        gap_s: Option<f64>,
+    }
+    impl step::AtCapacity for RunAt<'_> {
+        type Output = Result<Run, TrainError>;
+        fn run<const C2: usize, const F2: usize, const N2: usize>(
+            self,
+            model: &Model<'_, C2, F2, N2>,
+        ) -> Self::Output {
+            run_at_capacity(model, self.data, self.roles, self.temperature, self.gap_s)
         }
     }
-    run_at_capacity(model, data, roles, temperature, gap_s)
+    step::in_flight_capacity(
+        model,
+        RunAt {
+            data,
+            roles,
+            temperature,
+            gap_s,
+        },
+    )
 }
 
 /// [`run_model`] in the types `model` was decoded into, whatever their capacity.
@@ -153,8 +165,8 @@ pub fn run_at_capacity<const C2: usize, const F2: usize, const N2: usize>(
         None => vec![0.0; data.len()],
     };
     let starts = segments(time, gap_s);
-    let mut ch = Channel::<N2, F2>::new(1.0);
-    ch.set_time_on(crate::features::time_on_s(time, roles.power_on_s)? as f32);
+    let mut stepper = step::Stepper::new(model);
+    stepper.set_time_on(crate::features::time_on_s(time, roles.power_on_s)? as f32);
     let mut inputs = vec![0.0f32; cols.len()];
     let mut run = Run {
         time: time.to_vec(),
@@ -165,31 +177,18 @@ pub fn run_at_capacity<const C2: usize, const F2: usize, const N2: usize>(
     };
     let mut next = starts.iter().peekable();
     for i in 0..time.len() {
-        if next.peek().is_some_and(|&&s| s == i) {
-            next.next();
-            ch.mark_gap();
-        }
+        let gap = next.next_if(|&&s| s == i).is_some();
         for (v, c) in inputs.iter_mut().zip(&cols) {
             *v = c.get(i).copied().unwrap_or(f64::NAN) as f32;
         }
         let t = time.get(i).copied().unwrap_or(0.0);
-        let dt = if i == 0 {
-            1.0
-        } else {
-            (t - time.get(i - 1).copied().unwrap_or(t)) as f32
-        };
         let raw = target.get(i).copied().unwrap_or(f64::NAN);
         let r = reference.get(i).copied().unwrap_or(f64::NAN);
-        let out = ch.step_dt(Some(model), &inputs, dt, raw as f32);
-        if out.status.contains(Status::OUT_OF_RANGE) {
-            run.out_of_range += 1;
-        }
-        if out.status.contains(Status::INPUT_FAULT) || out.status.contains(Status::MODEL_FAULT) {
-            run.faults += 1;
-        }
         run.error.push(raw - r);
-        run.residual.push(f64::from(out.compensated) - r);
+        run.residual.push(stepper.step(t, gap, &inputs, raw, r));
     }
+    run.out_of_range = stepper.out_of_range;
+    run.faults = stepper.faults;
     Ok(run)
 }
 

@@ -21,13 +21,13 @@ use crate::dataset::Dataset;
 use crate::error::TrainError;
 use crate::metrics::Roles;
 use crate::metrics::online::{Accumulator, Flags};
-use crate::rbf64::C;
+use crate::metrics::step::{AtCapacity, Stepper, in_flight_capacity};
 use crate::{EvalReport, features};
 use flate2::read::MultiGzDecoder;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 use tcomp_core::stream::gap_resets;
-use tcomp_core::{Channel, HostModel, Model, Status};
+use tcomp_core::{HostModel, Model};
 
 mod pass;
 pub mod steps;
@@ -193,20 +193,31 @@ fn streamed<R: Read>(
     opts: &StreamOptions,
     median: Option<f64>,
 ) -> Result<Outcome, pass::Stop> {
-    if usize::from(model.rbf.n_features) <= features::FLIGHT_FEATURES {
-        let mut buf = vec![0u8; crate::blob_io::MAX_BLOB];
-        let narrow = model
-            .encode(&mut buf)
-            .ok()
-            .and_then(|len| buf.get(..len))
-            .and_then(|b| {
-                Model::<'_, C, { features::FLIGHT_FEATURES }, { features::N }>::decode(b).ok()
-            });
-        if let Some(m) = narrow {
-            return read(reader, gz, &m, opts, median);
+    /// [`read`] with its arguments, for [`in_flight_capacity`].
+    struct ReadAt<'o, R> {
+        reader: R,
+        gz: bool,
+        opts: &'o StreamOptions,
+        median: Option<f64>,
+    }
+    impl<R: Read> AtCapacity for ReadAt<'_, R> {
+        type Output = Result<Outcome, pass::Stop>;
+        fn run<const C2: usize, const F2: usize, const N2: usize>(
+            self,
+            model: &Model<'_, C2, F2, N2>,
+        ) -> Self::Output {
+            read(self.reader, self.gz, model, self.opts, self.median)
         }
     }
-    read(reader, gz, model, opts, median)
+    in_flight_capacity(
+        model,
+        ReadAt {
+            reader,
+            gz,
+            opts,
+            median,
+        },
+    )
 }
 
 fn read<R: Read, const C2: usize, const F2: usize, const N2: usize>(
@@ -237,17 +248,17 @@ fn run<R: Read, const C2: usize, const F2: usize, const N2: usize>(
     let mut rows = pass::Rows::open(reader, model, opts)?;
     let mut steps = steps::Steps::new(opts.gap_s.unwrap_or(0.0), median);
     let mut acc = Accumulator::new(opts.bin_s);
-    let mut ch = Channel::<N2, F2>::new(1.0);
+    let mut stepper = Stepper::new(model);
     let mut flags = Flags::default();
     let (mut first, mut prev) = (None::<f64>, 0.0);
     while let Some(row) = rows.next_row()? {
-        let dt = match first {
+        let gap = match first {
             None => {
                 first = Some(row.t);
                 let on =
                     features::time_on_s(&[row.t], opts.roles.power_on_s).map_err(|_| pass::Stop)?;
-                ch.set_time_on(on as f32);
-                1.0
+                stepper.set_time_on(on as f32);
+                false
             }
             Some(_) => {
                 let d = row.t - prev;
@@ -255,26 +266,20 @@ fn run<R: Read, const C2: usize, const F2: usize, const N2: usize>(
                     return Ok(Outcome::TooManySteps);
                 };
                 if gap {
-                    ch.mark_gap();
                     flags.gaps += 1;
                     if gap_resets(&model.program, d as f32) {
                         flags.restarted += 1;
                     }
                 }
-                d as f32
+                gap
             }
         };
         prev = row.t;
-        let out = ch.step_dt(Some(model), rows.inputs(), dt, row.raw as f32);
-        if out.status.contains(Status::OUT_OF_RANGE) {
-            flags.out_of_range += 1;
-        }
-        if out.status.contains(Status::INPUT_FAULT) || out.status.contains(Status::MODEL_FAULT) {
-            flags.faults += 1;
-        }
-        let residual = f64::from(out.compensated) - row.reference;
+        let residual = stepper.step(row.t, gap, rows.inputs(), row.raw, row.reference);
         acc.push(row.t, row.raw - row.reference, residual, row.temperature);
     }
+    flags.out_of_range = stepper.out_of_range;
+    flags.faults = stepper.faults;
     let Some((true_median, _, consistent)) = steps.finish() else {
         return Ok(Outcome::TooManySteps);
     };

@@ -18,12 +18,14 @@
 //! capacity u32, then the unit's serial (≤ [`MAX_SERIAL`] bytes). HELLO, COMMIT, ABORT and ACK
 //! carry nothing.
 //!
-//! The decoder is the output frames' approach (`crate::frame`): after garbage or a failed CRC it
-//! searches again from the byte after the false start, so a host listening to a link that carries
-//! both the unit's output frames and its update replies finds every reply (each output frame is
-//! garbage to it, and the reverse), and a unit recovers from a corrupt request at the next sync.
+//! The decoder is the core's sync-word [`Framer`] (the output frames' decoder is the same one):
+//! after garbage or a failed CRC it searches again from the byte after the false start, so a host
+//! listening to a link that carries both the unit's output frames and its update replies finds
+//! every reply (each output frame is garbage to it, and the reverse), and a unit recovers from a
+//! corrupt request at the next sync. This module only says how long a frame is and what it means.
 
 use crate::crc::Crc32;
+use crate::framer::{CRC_LEN, Framer, Framing};
 
 /// The two bytes every update frame starts with.
 pub const SYNC: [u8; 2] = [0xEB, 0x91];
@@ -223,21 +225,25 @@ impl Packet<'_> {
     }
 }
 
-/// What the start of the decoder's buffer holds.
-enum Candidate {
-    Incomplete,
-    NoFrame,
-    Good(usize),
+/// The update protocol's framing: a known kind and a payload length of at most [`MAX_PAYLOAD`].
+#[derive(Clone, Copy, Debug, Default)]
+struct Update;
+
+impl Framing for Update {
+    const SYNC: &'static [u8] = &SYNC;
+    const HEADER_LEN: usize = HEADER_LEN;
+
+    fn frame_len(header: &[u8]) -> Option<usize> {
+        Kind::from_u8(*header.get(2)?)?;
+        let len = usize::from(u16::from_le_bytes([*header.get(5)?, *header.get(6)?]));
+        (len <= MAX_PAYLOAD).then_some(HEADER_LEN + len + CRC_LEN)
+    }
 }
 
 /// Byte-at-a-time decoder with one frame of buffer.
 #[derive(Clone, Debug)]
 pub struct Decoder {
-    buf: [u8; MAX_FRAME],
-    len: usize,
-    /// Bytes of a frame handed out and still in the buffer (dropped at the next call).
-    ready: usize,
-    skipped: u32,
+    framer: Framer<Update, MAX_FRAME>,
 }
 
 impl Default for Decoder {
@@ -250,100 +256,24 @@ impl Decoder {
     /// A decoder that has seen nothing.
     pub const fn new() -> Self {
         Self {
-            buf: [0; MAX_FRAME],
-            len: 0,
-            ready: 0,
-            skipped: 0,
+            framer: Framer::new(),
         }
     }
 
-    /// Bytes dropped while searching for a frame (garbage, other frames, corrupt frames).
+    /// Bytes dropped while searching for a frame (garbage, other frames, corrupt frames; wrapping).
     pub const fn skipped(&self) -> u32 {
-        self.skipped
+        self.framer.skipped() as u32
     }
 
     /// Feeds one byte; returns a frame if one is complete. Call [`poll`](Self::poll) until `None`
     /// before the next byte (a resynchronisation can leave a second frame buffered).
     pub fn push(&mut self, byte: u8) -> Option<Packet<'_>> {
-        self.release();
-        if self.len >= self.buf.len() {
-            self.drop_front(1);
-            self.skipped += 1;
-        }
-        if let Some(slot) = self.buf.get_mut(self.len) {
-            *slot = byte;
-            self.len += 1;
-        }
-        self.poll()
+        self.framer.push(byte).and_then(parse_good)
     }
 
     /// Looks for a complete frame in the bytes already fed.
     pub fn poll(&mut self) -> Option<Packet<'_>> {
-        self.release();
-        loop {
-            match self.candidate() {
-                Candidate::Incomplete => return None,
-                Candidate::NoFrame => {
-                    self.drop_front(1);
-                    self.skipped += 1;
-                }
-                Candidate::Good(len) => {
-                    self.ready = len;
-                    let frame = self.buf.get(..len)?;
-                    return parse_good(frame);
-                }
-            }
-        }
-    }
-
-    fn release(&mut self) {
-        if self.ready > 0 {
-            self.drop_front(self.ready);
-            self.ready = 0;
-        }
-    }
-
-    fn candidate(&self) -> Candidate {
-        let bytes = self.buf.get(..self.len).unwrap_or(&[]);
-        for (i, s) in SYNC.iter().enumerate() {
-            match bytes.get(i) {
-                None => return Candidate::Incomplete,
-                Some(b) if b != s => return Candidate::NoFrame,
-                Some(_) => {}
-            }
-        }
-        let Some(head) = bytes.get(..HEADER_LEN) else {
-            return Candidate::Incomplete;
-        };
-        let kind = head.get(2).copied().and_then(Kind::from_u8);
-        let len = usize::from(u16::from_le_bytes([
-            head.get(5).copied().unwrap_or(0xFF),
-            head.get(6).copied().unwrap_or(0xFF),
-        ]));
-        if kind.is_none() || len > MAX_PAYLOAD {
-            return Candidate::NoFrame;
-        }
-        let total = HEADER_LEN + len + 4;
-        let Some(frame) = bytes.get(..total) else {
-            return Candidate::Incomplete;
-        };
-        let mut crc = Crc32::new();
-        crc.update(frame.get(2..total - 4).unwrap_or(&[]));
-        let sent = frame
-            .get(total - 4..)
-            .and_then(|b| <[u8; 4]>::try_from(b).ok())
-            .map(u32::from_le_bytes);
-        if sent == Some(crc.finish()) {
-            Candidate::Good(total)
-        } else {
-            Candidate::NoFrame
-        }
-    }
-
-    fn drop_front(&mut self, n: usize) {
-        let n = n.min(self.len);
-        self.buf.copy_within(n..self.len, 0);
-        self.len -= n;
+        self.framer.poll().and_then(parse_good)
     }
 }
 
