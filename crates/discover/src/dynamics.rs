@@ -214,37 +214,22 @@ fn refined(lags: &mut Lags<'_>, mut taus: Vec<f64>) -> Vec<f64> {
     const SWEEPS: usize = 2;
     const STEPS: usize = 12;
     let (lo_r, hi_r) = (LAG_RANGE_S.0.ln(), LAG_RANGE_S.1.ln());
-    let phi = (5f64.sqrt() - 1.0) / 2.0;
     for _ in 0..SWEEPS {
         for i in 0..taus.len() {
             let Some(&t0) = taus.get(i) else { continue };
-            let mut a = (t0 / DISTINCT_RATIO).ln().max(lo_r);
-            let mut b = (t0 * DISTINCT_RATIO).ln().min(hi_r);
-            let mut f = |v: f64, taus: &mut Vec<f64>| {
-                if let Some(slot) = taus.get_mut(i) {
-                    *slot = v.exp();
-                }
-                lags.evidence(taus)
-            };
-            let mut c = b - phi * (b - a);
-            let mut d = a + phi * (b - a);
-            let (mut fc, mut fd) = (f(c, &mut taus), f(d, &mut taus));
-            for _ in 0..STEPS {
-                if fc >= fd {
-                    b = d;
-                    d = c;
-                    fd = fc;
-                    c = b - phi * (b - a);
-                    fc = f(c, &mut taus);
-                } else {
-                    a = c;
-                    c = d;
-                    fc = fd;
-                    d = a + phi * (b - a);
-                    fd = f(d, &mut taus);
-                }
-            }
-            let best = if fc >= fd { c } else { d };
+            let a = (t0 / DISTINCT_RATIO).ln().max(lo_r);
+            let b = (t0 * DISTINCT_RATIO).ln().min(hi_r);
+            let (best, _) = crate::param::golden(
+                |v| {
+                    if let Some(slot) = taus.get_mut(i) {
+                        *slot = v.exp();
+                    }
+                    lags.evidence(&taus)
+                },
+                a,
+                b,
+                STEPS,
+            );
             if let Some(slot) = taus.get_mut(i) {
                 *slot = rounded(best.exp());
             }

@@ -218,7 +218,6 @@ pub(crate) fn reestimate(
     if !best.is_finite() || params(&current, added).is_empty() {
         return (current, Vec::new());
     }
-    let r = (5f64.sqrt() - 1.0) / 2.0;
     for _ in 0..SWEEPS {
         let before = current.clone();
         let n = params(&current, added).len();
@@ -236,26 +235,7 @@ pub(crate) fn reestimate(
             if hi <= lo {
                 continue;
             }
-            let (mut a, mut b) = (lo, hi);
-            let mut c = b - r * (b - a);
-            let mut d = a + r * (b - a);
-            let (mut fc, mut fd) = (eval(c), eval(d));
-            for _ in 0..STEPS {
-                if fc >= fd {
-                    b = d;
-                    d = c;
-                    fd = fc;
-                    c = b - r * (b - a);
-                    fc = eval(c);
-                } else {
-                    a = c;
-                    c = d;
-                    fc = fd;
-                    d = a + r * (b - a);
-                    fd = eval(d);
-                }
-            }
-            let (u, f) = if fc >= fd { (c, fc) } else { (d, fd) };
+            let (u, f) = crate::param::golden(eval, lo, hi, STEPS);
             if f > best + crate::verdict::INDISTINCT_NATS {
                 current = with_value(&current, &p, two_significant(u.exp()));
                 best = f;

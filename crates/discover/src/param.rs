@@ -91,31 +91,31 @@ pub fn two_significant(v: f64) -> f64 {
     (v / scale).round() * scale
 }
 
-/// Golden-section maximisation of `f` over `[a, b]`, recording every evaluation in `seen`.
-fn golden(f: &(dyn Fn(f64) -> f64 + Sync), a: f64, b: f64, seen: &mut Vec<(f64, f64)>) {
+/// Golden-section maximisation of `f` over `[a, b]` with `steps` evaluations after the first
+/// two: the better of the last two points and its value. The one search of the crate (a family's
+/// parameter here, the lag bank's time constants, the rounds' joint re-estimation).
+pub(crate) fn golden(mut f: impl FnMut(f64) -> f64, a: f64, b: f64, steps: usize) -> (f64, f64) {
     let r = (5f64.sqrt() - 1.0) / 2.0;
     let (mut a, mut b) = (a, b);
     let mut c = b - r * (b - a);
     let mut d = a + r * (b - a);
     let (mut fc, mut fd) = (f(c), f(d));
-    seen.extend([(c, fc), (d, fd)]);
-    for _ in 2..GOLDEN_STEPS {
+    for _ in 0..steps {
         if fc >= fd {
             b = d;
             d = c;
             fd = fc;
             c = b - r * (b - a);
             fc = f(c);
-            seen.push((c, fc));
         } else {
             a = c;
             c = d;
             fc = fd;
             d = a + r * (b - a);
             fd = f(d);
-            seen.push((d, fd));
         }
     }
+    if fc >= fd { (c, fc) } else { (d, fd) }
 }
 
 /// Where the profile (sorted by `u`) falls below `thr`, walking from index `i` in direction
@@ -159,10 +159,14 @@ pub fn estimate(
         return None;
     }
     golden(
-        &f,
+        |u| {
+            let v = f(u);
+            seen.push((u, v));
+            v
+        },
         at(best_grid.saturating_sub(1)),
         at((best_grid + 1).min(GRID - 1)),
-        &mut seen,
+        GOLDEN_STEPS - 2,
     );
     seen.sort_by(|a, b| a.0.total_cmp(&b.0));
     let (ib, &(ub, fb)) = seen
