@@ -319,6 +319,42 @@ impl Prepared {
         (phi, groups, a0)
     }
 
+    /// The training run's duration (s), first row to last.
+    pub(crate) fn duration_s(&self) -> f64 {
+        self.data
+            .time(&self.time)
+            .ok()
+            .and_then(|t| Some(t.last()? - t.first()?))
+            .unwrap_or(0.0)
+    }
+
+    /// The training run with one row per bin, every column its bin's mean: what a screen over many
+    /// expressions evaluates them on, sixty times fewer rows (a stateful function's time scales
+    /// shorter than a bin are blurred there, so a screen's best is computed again on every row).
+    pub(crate) fn bin_rows(&self) -> Dataset {
+        let names = self.data.names().to_vec();
+        let cols = names
+            .iter()
+            .map(|n| {
+                self.data
+                    .column(n)
+                    .map(|c| bin_mean(c, &self.tbins))
+                    .unwrap_or_default()
+            })
+            .collect();
+        Dataset::from_columns(self.data.file(), names, cols)
+    }
+
+    /// The model's signals (`NAME = EXPR`), which candidate expressions may use.
+    pub(crate) fn signals(&self) -> &[String] {
+        &self.signals
+    }
+
+    /// The name of the time column.
+    pub(crate) fn time_name(&self) -> &str {
+        &self.time
+    }
+
     /// The binned training columns of `exprs`, as they are (not standardised).
     pub(crate) fn binned(&self, exprs: &[String]) -> Result<Columns> {
         compute_binned(

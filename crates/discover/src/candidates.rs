@@ -129,6 +129,14 @@ pub enum Searched {
     No,
     /// Read off a bank of columns by automatic relevance determination ([`crate::dynamics`]).
     Bank(Vec<String>),
+    /// The best of these alternatives, each a whole candidate: a composition's members across its
+    /// parameters ([`crate::compose`]), chosen among `among` shapes searched.
+    Alternatives {
+        /// The members, each one expression.
+        members: Vec<String>,
+        /// Shapes the composition was chosen among.
+        among: usize,
+    },
 }
 
 impl Searched {

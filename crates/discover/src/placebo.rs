@@ -41,7 +41,9 @@
 //!   controls (`tests/false_discoveries.rs`, BENCHMARKS.md).
 //! - **Candidates read off the data** ([`crate::candidates::Searched`]): a bank reading's
 //!   placebos are each the best the bank reads on the shifted bank (its columns each their own
-//!   prior group, automatic relevance determination), as the candidate is the bank's reading.
+//!   prior group, automatic relevance determination), as the candidate is the bank's reading; a
+//!   composition's placebos are each the best of its members across its parameters on the
+//!   shifted columns ([`crate::compose`]), as the candidate is the best of them on the run.
 //!
 //! Tried and not kept: placebo *runs* — the base fit plus its residual shifted in time (Freedman
 //! and Lane's permutation of the reduced model's residual). On the dev seeds of the negative
@@ -244,6 +246,13 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
                         .map(|v| v.into_iter().flatten().collect());
                     members.extend(cols.map(|b| (b, true)));
                 }
+                Searched::Alternatives { members: alts, .. } => {
+                    for e in alts {
+                        if let Ok(cols) = p.standardised_training(std::slice::from_ref(e)) {
+                            members.push((cols, false));
+                        }
+                    }
+                }
             }
             Some((i, members, s))
         })
@@ -289,7 +298,8 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
             .iter()
             .zip(&stats)
             .find(|((tt, m, ss), _)| *tt == t && *m == 0 && *ss == 0)
-            .map_or(f64::NEG_INFINITY, |(_, v)| *v);
+            .map_or(f64::NEG_INFINITY, |(_, v)| *v)
+            - cands.get(*i).map_or(0.0, |c| shape_prior(&c.searched));
         if let Some(c) = cands.get_mut(*i) {
             c.placebo = Some(Placebo {
                 rho,
@@ -302,6 +312,18 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
                 refit: None,
             });
         }
+    }
+}
+
+/// The log prior odds against a composition chosen among many shapes (nats): each of the `among`
+/// shapes [`crate::compose`] searched holds `1/among` of the prior a listed family holds, so its
+/// statistic is lowered by `ln among` before it meets the placebos' threshold. The placebos
+/// repeat the search of the shape's parameters, not the choice of the shape; this is the choice's
+/// price.
+fn shape_prior(s: &Searched) -> f64 {
+    match s {
+        Searched::Alternatives { among, .. } => ((*among).max(1) as f64).ln(),
+        _ => 0.0,
     }
 }
 

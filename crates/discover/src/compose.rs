@@ -1,0 +1,995 @@
+//! Candidates composed from the feature language: every function of the language applied to every
+//! input, then again to the best of those, with every parameter estimated — so that an effect
+//! nobody wrote a family for (a relay on a shifted temperature, the rate of a lagged input, an
+//! input times a rate) is still searched.
+//!
+//! Why: the families of [`crate::candidates`] are the shapes someone thought of. A hidden set made
+//! of new compositions (a mode hop that switches at one temperature on heating and another on
+//! cooling, a supply voltage acting through a lag) was named as the nearest listed shape. Here the
+//! shapes come from [`tcomp_core::lang::FUNCTIONS`] itself: a function added to the language is
+//! composed with everything else without editing this module.
+//!
+//! How:
+//! - **Atoms**: the sensor's temperatures (the model's signals and thermometer columns), the
+//!   differences of thermometer pairs (gradients), the non-thermal inputs, and the language's
+//!   functions of time alone (`warmup(τ)`). Never the chamber's air or another inertial output
+//!   ([`Sources`] sorted them out).
+//! - **Operators**: every function with one operand, and the product with an atom.
+//! - **Parameters** get their range from what they are, read from the language's table and the
+//!   operand's data — not from a list per function: a parameter in seconds (`tau_s`, `window_s`)
+//!   spans half a bin to a third of the run, log-spaced; a non-negative threshold spans 1 % to
+//!   50 % of the operand's spread, log-spaced; a location (`clamp`'s bounds, a shift) spans the
+//!   operand's 5th to 95th percentile.
+//! - **A shift** `x − c`, `c` estimated, is put in front of a *level* operand (a temperature, a
+//!   voltage: its zero is a convention) when the function depends on where zero is: tested
+//!   numerically, once per function, by whether `f(x − c)` lies in the span of `f(x)`, `x` and 1
+//!   (`lag`, `rate` and `sq` are not shifted: the model's linear terms already absorb what a shift
+//!   changes). A function with a location parameter of its own (`clamp`) is not shifted either.
+//!   That is how `hyst(T − c, h)` — a bias that switches at `c + h` on heating and `c − h` on
+//!   cooling — arises without being listed.
+//! - **Scored cheaply first**: each composition's column against the base design's residual by the
+//!   sparse-Bayesian increment of Tipping and Faul (2003): the gain in log evidence of adding one
+//!   column at its best prior precision, the base's hyperparameters held — closed-form, no refit.
+//!   Each shape's parameters are searched on a coarse grid; the best shapes are refined by
+//!   golden-section sweeps ([`crate::param::golden`]).
+//!
+//! Pruned by physics: depth two at most; a memoryless function is not applied to its own output
+//! (`abs(abs(x))`, `clamp(clamp(x))` add nothing); a shift only where the function depends on it.
+//! Pruned by evidence: only the [`BEAM`] best depth-one shapes are composed again, and only the
+//! [`PROPOSED`] best shapes that no listed family already covers are handed on. They are then
+//! scored, refitted, placebo-tested — each placebo the best of the same shape's members on the
+//! shifted columns ([`crate::candidates::Searched::Alternatives`]), since the candidate is the best
+//! of them on the run — and judged like every other candidate, including the leg that the
+//! trainer's refit with a candidate read off the data must gain evidence ([`crate::verdict`]).
+
+use crate::base::Prepared;
+use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use std::collections::HashSet;
+use tcomp_core::expr::{BinOp, Expr};
+use tcomp_core::lang::{self, Domain, Function, Operands};
+use tcomp_train::Dataset;
+use tcomp_train::features::{self, FeatureSpec};
+
+/// Depth-one shapes composed again.
+pub const BEAM: usize = 6;
+/// Composed candidates handed on to scoring.
+pub const PROPOSED: usize = 4;
+/// Nats a depth-two composition must gain over the best depth-one shape (odds of about 20 : 1).
+const EARN_NATS: f64 = 3.0;
+/// Golden-section steps per parameter and sweep of the refinement.
+const REFINE_STEPS: usize = 7;
+/// Sweeps of the refinement (one parameter at a time).
+const SWEEPS: usize = 2;
+
+/// What a parameter is, which sets its range.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Role {
+    /// A time in seconds (the language names them `*_s`).
+    Time,
+    /// A non-negative size on the operand's scale (a threshold).
+    Threshold,
+    /// A place on the operand's scale (a bound, a shift).
+    Location,
+}
+
+/// A parameter's range; log-spaced unless a location.
+#[derive(Clone, Copy, Debug)]
+struct Range {
+    lo: f64,
+    hi: f64,
+    role: Role,
+}
+
+impl Range {
+    /// The value at `u` ∈ [0, 1] across the range.
+    fn at(&self, u: f64) -> f64 {
+        let u = u.clamp(0.0, 1.0);
+        match self.role {
+            Role::Location => self.lo + (self.hi - self.lo) * u,
+            _ => self.lo * (self.hi / self.lo).powf(u),
+        }
+    }
+
+    /// The value as printed: two significant figures for sizes, three for places.
+    fn rounded(&self, v: f64) -> f64 {
+        match self.role {
+            Role::Location => significant(v, 3),
+            _ => significant(v, 2),
+        }
+    }
+}
+
+/// `v` to `n` significant figures.
+fn significant(v: f64, n: usize) -> f64 {
+    if !v.is_finite() || v == 0.0 {
+        return v;
+    }
+    // Through the decimal text, so that the value prints as typed (26.4, not 26.400000000000002).
+    format!("{:.*e}", n.saturating_sub(1), v)
+        .parse()
+        .unwrap_or(v)
+}
+
+/// An input the compositions start from.
+#[derive(Clone, Debug)]
+struct Atom {
+    expr: Expr,
+    /// Its zero is a convention (a temperature, a voltage), not a physical zero (a gradient).
+    level: bool,
+}
+
+/// The operator a shape applies.
+#[derive(Clone, Debug)]
+enum Op {
+    /// A function of the language.
+    Call(&'static Function),
+    /// The product with an atom.
+    Times(Expr),
+}
+
+/// A composition with its newest parameters free: `op` applied to `operand` (an atom, or a
+/// depth-one shape at its estimated parameters).
+#[derive(Clone, Debug)]
+struct Shape {
+    operand: Option<Expr>,
+    op: Op,
+    /// A shift `operand − c` is estimated (the first parameter).
+    shifted: bool,
+    /// The shift and the threshold that follows it are searched as two switching points on the
+    /// operand's scale, upper and lower (a relay's evidence is peaked in each of them apart;
+    /// in the shift and the half-width it lies along a diagonal ridge).
+    switching: bool,
+    ranges: Vec<Range>,
+    /// The operand is a level (see [`Atom::level`]).
+    level: bool,
+}
+
+impl Shape {
+    /// The expression at parameter values `v` (one per range).
+    fn build(&self, v: &[f64]) -> Expr {
+        let mut all: Vec<f64> = self
+            .ranges
+            .iter()
+            .zip(v)
+            .map(|(r, &x)| r.rounded(r.at(x)))
+            .collect();
+        if self.switching {
+            // Two switching points, upper and lower, as the shift and the threshold around it.
+            if let (Some(&a), Some(&b)) = (all.first(), all.get(1)) {
+                let (hi, lo) = (a.max(b), a.min(b));
+                all[0] = significant((hi + lo) / 2.0, 3);
+                all[1] = significant((hi - lo) / 2.0, 2);
+            }
+        }
+        let mut vals = all.into_iter();
+        match &self.op {
+            Op::Times(a) => a.clone() * self.operand.clone().unwrap_or(Expr::num(1.0)),
+            Op::Call(f) => {
+                let mut args = Vec::new();
+                if let Some(x) = &self.operand {
+                    let x = if self.shifted {
+                        let c = vals.next().unwrap_or(0.0);
+                        if c < 0.0 {
+                            x.clone() + Expr::num(-c)
+                        } else {
+                            x.clone() - Expr::num(c)
+                        }
+                    } else {
+                        x.clone()
+                    };
+                    args.push(x);
+                }
+                let mut prev = f64::NEG_INFINITY;
+                for p in f.params {
+                    let mut v = vals.next().unwrap_or(f64::from(p.default.unwrap_or(1.0)));
+                    if p.domain == Domain::NotBelowPrevious {
+                        v = v.max(prev);
+                    }
+                    prev = v;
+                    args.push(Expr::num(v));
+                }
+                Expr::call(f.name, args)
+            }
+        }
+    }
+}
+
+/// What a function does to a level, read off the language's own evaluator once per function.
+#[derive(Clone, Copy, Debug)]
+struct Behaviour {
+    /// `f(x − c)` is not in the span of `f(x)`, `x` and 1: where zero is matters.
+    shift_matters: bool,
+    /// `f(x + c) = f(x) + c`: the output is a level too (a lag).
+    keeps_level: bool,
+}
+
+/// A smooth up-and-down test profile and its shifted copy, through `f` at mid-range parameters.
+fn behaviour(f: &Function) -> Option<Behaviour> {
+    if f.operands != Operands::One {
+        return None;
+    }
+    let n = 3000;
+    let x: Vec<f64> = (0..n)
+        .map(|i| {
+            let t = i as f64;
+            20.0 + 30.0 * (std::f64::consts::TAU * t / 1500.0).sin() + 5.0 * (t / 370.0).cos()
+        })
+        .collect();
+    let params = |_: ()| -> Vec<Expr> {
+        let mut prev = f64::NEG_INFINITY;
+        f.params
+            .iter()
+            .map(|p| {
+                let v = if p.name.ends_with("_s") {
+                    100.0
+                } else {
+                    match p.domain {
+                        Domain::NonNegative | Domain::Positive => 5.0,
+                        Domain::Finite => 0.0,
+                        Domain::NotBelowPrevious => prev.max(0.0) + 30.0,
+                    }
+                };
+                prev = v;
+                Expr::num(v)
+            })
+            .collect()
+    };
+    let call = |x: Expr| Expr::call(f.name, std::iter::once(x).chain(params(())));
+    let exprs = [
+        call(Expr::name("x")).to_string(),
+        call(Expr::name("x") - Expr::num(10.0)).to_string(),
+        call(Expr::name("x") + Expr::num(10.0)).to_string(),
+    ];
+    let time: Vec<f64> = (0..n).map(|i| i as f64).collect();
+    let data = Dataset::from_columns(
+        "composition test",
+        vec!["time_s".into(), "x".into()],
+        vec![time.clone(), x.clone()],
+    );
+    let spec = FeatureSpec {
+        signals: Vec::new(),
+        features: exprs.to_vec(),
+    };
+    let program = spec.program().ok()?;
+    let rows = features::compute(&program, &data, &time, &[0]).ok()?;
+    let col = |k: usize| -> Vec<f64> { rows.iter().map(|r| f64::from(r[k])).collect() };
+    let (fx, fs, fp) = (col(0), col(1), col(2));
+    let unexplained = unexplained(&fs, &[&fx, &x]);
+    let scale = fx.iter().map(|v| v.abs()).fold(0.0, f64::max).max(1e-9);
+    let keeps = fp
+        .iter()
+        .zip(&fx)
+        .all(|(a, b)| ((a - b) - 10.0).abs() <= 1e-3 * (scale + 10.0));
+    Some(Behaviour {
+        shift_matters: unexplained > 1e-4,
+        keeps_level: keeps,
+    })
+}
+
+/// 1 − R² of `y` on `xs` and a constant (least squares).
+fn unexplained(y: &[f64], xs: &[&Vec<f64>]) -> f64 {
+    let n = y.len();
+    let m = xs.len() + 1;
+    let a = DMatrix::from_fn(n, m, |i, j| {
+        if j == 0 {
+            1.0
+        } else {
+            xs.get(j - 1).and_then(|c| c.get(i)).copied().unwrap_or(0.0)
+        }
+    });
+    let yv = DVector::from_column_slice(y);
+    let g = a.tr_mul(&a) + DMatrix::identity(m, m) * 1e-9;
+    let Some(ch) = g.cholesky() else { return 1.0 };
+    let b = ch.solve(&a.tr_mul(&yv));
+    let r = &yv - &a * b;
+    let mean = y.iter().sum::<f64>() / n.max(1) as f64;
+    let ss: f64 = y.iter().map(|v| (v - mean).powi(2)).sum();
+    if ss <= 1e-300 {
+        return 0.0;
+    }
+    r.dot(&r) / ss
+}
+
+/// The cheap score: Tipping and Faul's increment of the log evidence for adding one column to the
+/// base design at its best prior precision, the base's hyperparameters held.
+struct Screen<'a> {
+    p: &'a Prepared,
+    /// The training run one row per bin (the coarse grid's columns).
+    rows: Dataset,
+    /// Residual of the base posterior mean.
+    r: DVector<f64>,
+    /// Posterior covariance of the base weights.
+    cov: DMatrix<f64>,
+    beta: f64,
+}
+
+impl<'a> Screen<'a> {
+    fn new(p: &'a Prepared) -> Option<Self> {
+        let phi = &p.phi;
+        let beta = p.base.beta;
+        let m = phi.ncols();
+        let mut a = phi.tr_mul(phi) * beta;
+        for j in 0..m {
+            let g = p.groups.get(j).copied().unwrap_or(0);
+            let alpha = p.base.alpha.get(g).copied().unwrap_or(0.0);
+            a[(j, j)] += alpha.max(1e-12);
+        }
+        let cov = a.try_inverse()?;
+        let r = &p.y - phi * &p.base.w;
+        Some(Screen {
+            p,
+            rows: p.bin_rows(),
+            r,
+            cov,
+            beta,
+        })
+    }
+
+    /// The gain of `e` computed on every row (nats; −∞ when its column cannot be computed or is
+    /// constant).
+    fn gain(&self, e: &Expr) -> f64 {
+        let Ok(cols) = self.p.binned(&[e.to_string()]) else {
+            return f64::NEG_INFINITY;
+        };
+        cols.into_iter()
+            .next()
+            .map_or(f64::NEG_INFINITY, |c| self.gain_of(c))
+    }
+
+    /// The gain of `e` computed on the bins' mean rows: a coarse grid's screen.
+    fn gain_coarse(&self, e: &Expr) -> f64 {
+        let spec = FeatureSpec {
+            signals: self.p.signals().to_vec(),
+            features: vec![e.to_string()],
+        };
+        let Ok(program) = spec.program() else {
+            return f64::NEG_INFINITY;
+        };
+        let Ok(time) = self.rows.time(self.p.time_name()) else {
+            return f64::NEG_INFINITY;
+        };
+        let Ok(rows) = features::compute(&program, &self.rows, time, &[0]) else {
+            return f64::NEG_INFINITY;
+        };
+        self.gain_of(rows.iter().map(|r| f64::from(r[0])).collect())
+    }
+
+    /// The gain of one binned column.
+    fn gain_of(&self, c: Vec<f64>) -> f64 {
+        if c.len() != self.r.len() {
+            return f64::NEG_INFINITY;
+        }
+        let (m, sd) = crate::design::mean_sd(&c);
+        if !(sd > 1e-12) || !sd.is_finite() {
+            return f64::NEG_INFINITY;
+        }
+        let c = DVector::from_iterator(c.len(), c.iter().map(|v| (v - m) / sd));
+        let u = self.p.phi.tr_mul(&c);
+        let s = self.beta * c.dot(&c) - self.beta * self.beta * (u.transpose() * &self.cov * &u)[0];
+        let q = self.beta * c.dot(&self.r);
+        if !(s > 1e-12) || !q.is_finite() {
+            return f64::NEG_INFINITY;
+        }
+        let q2 = q * q;
+        if q2 <= s {
+            return 0.0;
+        }
+        0.5 * ((q2 - s) / s + (s / q2).ln())
+    }
+}
+
+/// A shape searched: its parameters (positions in [0, 1] across each range) and its gain.
+#[derive(Clone, Debug)]
+struct Found {
+    shape: Shape,
+    u: Vec<f64>,
+    gain: f64,
+}
+
+impl Found {
+    fn expr(&self) -> Expr {
+        self.shape.build(&self.u)
+    }
+}
+
+/// The coarse grid's positions per parameter for a shape with `k` parameters.
+fn per_param(k: usize) -> usize {
+    match k {
+        0 => 1,
+        1 => 24,
+        2 => 16,
+        _ => 8,
+    }
+}
+
+/// Every point of the coarse grid.
+fn grid(k: usize) -> Vec<Vec<f64>> {
+    let per = per_param(k);
+    let mut out = vec![Vec::new()];
+    for _ in 0..k {
+        out = out
+            .into_iter()
+            .flat_map(|v| {
+                (0..per).map(move |i| {
+                    let mut w = v.clone();
+                    w.push((i as f64 + 0.5) / per as f64);
+                    w
+                })
+            })
+            .collect();
+    }
+    out
+}
+
+/// Starts of the refinement on the coarse screen: the best points of a shape's grid (a relay's
+/// evidence is sharply peaked in its switching points, and the grid's best may sit on a ridge
+/// away from the peak).
+const STARTS: usize = 4;
+
+/// `shape` searched on the coarse screen: its grid, then the [`STARTS`] best points refined.
+fn coarse(screen: &Screen<'_>, shape: &Shape) -> Option<Found> {
+    let mut pts: Vec<Found> = grid(shape.ranges.len())
+        .into_iter()
+        .map(|u| {
+            let gain = screen.gain_coarse(&shape.build(&u));
+            Found {
+                shape: shape.clone(),
+                u,
+                gain,
+            }
+        })
+        .filter(|f| f.gain.is_finite())
+        .collect();
+    pts.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+    pts.truncate(if shape.ranges.is_empty() { 1 } else { STARTS });
+    pts.into_iter()
+        .map(|f| refine(f, |e| screen.gain_coarse(e)))
+        .max_by(|a, b| a.gain.total_cmp(&b.gain))
+}
+
+/// `f` refined on `objective`: golden-section sweeps, one parameter at a time, within a grid
+/// step of where it is.
+fn refine(mut f: Found, objective: impl Fn(&Expr) -> f64) -> Found {
+    f.gain = objective(&f.expr());
+    let k = f.u.len();
+    let step = 1.0 / per_param(k) as f64;
+    for _ in 0..SWEEPS {
+        let mut moved = false;
+        for j in 0..k {
+            let at = f.u.get(j).copied().unwrap_or(0.5);
+            let mut trial = f.u.clone();
+            let (u, g) = crate::param::golden(
+                |x| {
+                    if let Some(t) = trial.get_mut(j) {
+                        *t = x;
+                    }
+                    objective(&f.shape.build(&trial))
+                },
+                (at - step).max(0.0),
+                (at + step).min(1.0),
+                REFINE_STEPS,
+            );
+            if g > f.gain {
+                if let Some(t) = f.u.get_mut(j) {
+                    *t = u;
+                }
+                f.gain = g;
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    f
+}
+
+/// The binned training values of `e` (empty when they cannot be computed).
+fn values(p: &Prepared, e: &Expr) -> Vec<f64> {
+    p.binned(&[e.to_string()])
+        .ok()
+        .and_then(|c| c.into_iter().next())
+        .unwrap_or_default()
+}
+
+/// The 5th and 95th percentiles of `v`.
+fn spread(v: &[f64]) -> Option<(f64, f64)> {
+    let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if s.len() < 4 {
+        return None;
+    }
+    s.sort_by(f64::total_cmp);
+    let q = |f: f64| s.get(((s.len() - 1) as f64 * f).round() as usize).copied();
+    Some((q(0.05)?, q(0.95)?))
+}
+
+/// The shapes of `f` over `operand` (a level or not): the ranges of its parameters from the
+/// operand's values, a shift in front when `f` depends on where zero is.
+fn shape_of(
+    p: &Prepared,
+    times: (f64, f64),
+    f: &'static Function,
+    b: Behaviour,
+    operand: &Expr,
+    level: bool,
+) -> Option<Shape> {
+    let own_location = f
+        .params
+        .iter()
+        .any(|q| matches!(q.domain, Domain::Finite | Domain::NotBelowPrevious));
+    let shifted = level && b.shift_matters && !own_location;
+    let (lo, hi) = spread(&values(p, operand))?;
+    let width = hi - lo;
+    if !(width > 0.0) {
+        return None;
+    }
+    let mut ranges = Vec::new();
+    if shifted {
+        ranges.push(Range {
+            lo,
+            hi,
+            role: Role::Location,
+        });
+    }
+    for q in f.params {
+        ranges.push(param_range(q, times, Some((lo, hi))));
+    }
+    let switching = shifted && ranges.get(1).is_some_and(|r| r.role == Role::Threshold);
+    if switching {
+        if let Some(r) = ranges.get_mut(1) {
+            *r = Range {
+                lo,
+                hi,
+                role: Role::Location,
+            };
+        }
+    }
+    Some(Shape {
+        operand: Some(operand.clone()),
+        op: Op::Call(f),
+        shifted,
+        switching,
+        ranges,
+        level,
+    })
+}
+
+/// The range of parameter `q`: a time between half a bin and a third of the run, a threshold
+/// between 1 % and 50 % of the operand's spread, a location across it.
+fn param_range(q: &lang::Param, times: (f64, f64), operand: Option<(f64, f64)>) -> Range {
+    if q.name.ends_with("_s") {
+        return Range {
+            lo: times.0,
+            hi: times.1,
+            role: Role::Time,
+        };
+    }
+    let (lo, hi) = operand.unwrap_or((0.0, 1.0));
+    let width = (hi - lo).max(1e-9);
+    match q.domain {
+        Domain::Finite | Domain::NotBelowPrevious => Range {
+            lo,
+            hi,
+            role: Role::Location,
+        },
+        Domain::NonNegative | Domain::Positive => Range {
+            lo: 0.01 * width,
+            hi: 0.5 * width,
+            role: Role::Threshold,
+        },
+    }
+}
+
+/// The signature of an expression: its text with every number replaced by `#` and every numeric
+/// argument of a call dropped (the same shape at any parameter, a defaulted one included:
+/// `rate(x)` and `rate(x, 67)` are one shape).
+fn signature(e: &str) -> String {
+    numbered(e).replace(",#", "")
+}
+
+/// `e` without spaces, every number `#`.
+fn numbered(e: &str) -> String {
+    let mut out = String::new();
+    let mut prev_word = false;
+    let mut in_num = false;
+    for ch in e.chars().filter(|c| !c.is_whitespace()) {
+        let starts_num = ch.is_ascii_digit() && !prev_word;
+        if in_num && (ch.is_ascii_digit() || ch == '.' || ch == 'e' || ch == 'E') {
+            continue;
+        }
+        in_num = false;
+        if starts_num {
+            in_num = true;
+            out.push('#');
+            prev_word = false;
+            continue;
+        }
+        prev_word = ch.is_alphanumeric() || ch == '_';
+        out.push(ch);
+    }
+    out
+}
+
+/// The atoms of `src`.
+fn atoms(src: &Sources) -> Vec<Atom> {
+    let mut out: Vec<Atom> = src
+        .temperatures
+        .iter()
+        .map(|t| Atom {
+            expr: Expr::name(t),
+            level: true,
+        })
+        .collect();
+    let th = &src.thermometers;
+    for (i, a) in th.iter().enumerate() {
+        for b in th.iter().skip(i + 1) {
+            out.push(Atom {
+                expr: Expr::name(a) - Expr::name(b),
+                level: false,
+            });
+        }
+    }
+    out.extend(src.inputs.iter().map(|c| Atom {
+        expr: Expr::name(c),
+        level: true,
+    }));
+    out
+}
+
+/// The composed candidate families for `src`, leaving out shapes `listed` (every other family)
+/// already covers.
+pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
+    let Some(screen) = Screen::new(p) else {
+        return Vec::new();
+    };
+    let covered: HashSet<String> = listed
+        .iter()
+        .flat_map(|f| &f.members)
+        .flat_map(|m| &m.expressions)
+        .map(|e| signature(e))
+        .collect();
+    let bin = p.figures.bin_s;
+    let times = (0.5 * bin, (p.duration_s() / 3.0).max(bin));
+    let functions: Vec<(&'static Function, Behaviour)> = lang::FUNCTIONS
+        .iter()
+        .filter_map(|f| behaviour(f).map(|b| (f, b)))
+        .collect();
+    let atoms = atoms(src);
+
+    // Depth one: every function over every atom, the products of two atoms, and the functions of
+    // time alone.
+    let mut shapes: Vec<Shape> = Vec::new();
+    for a in &atoms {
+        for &(f, b) in &functions {
+            shapes.extend(shape_of(p, times, f, b, &a.expr, a.level));
+        }
+    }
+    for (i, a) in atoms.iter().enumerate() {
+        for b in atoms.iter().skip(i + 1) {
+            shapes.push(Shape {
+                operand: Some(b.expr.clone()),
+                op: Op::Times(a.expr.clone()),
+                shifted: false,
+                switching: false,
+                ranges: Vec::new(),
+                level: false,
+            });
+        }
+    }
+    for f in lang::FUNCTIONS
+        .iter()
+        .filter(|f| f.operands == Operands::None)
+    {
+        shapes.push(Shape {
+            operand: None,
+            op: Op::Call(f),
+            shifted: false,
+            switching: false,
+            ranges: f
+                .params
+                .iter()
+                .map(|q| param_range(q, times, None))
+                .collect(),
+            level: false,
+        });
+    }
+    let mut among = shapes.len();
+    let first = best(&screen, shapes, BEAM);
+
+    // Depth two: every function over the best, and their products with every atom.
+    let mut next: Vec<Shape> = Vec::new();
+    for n in &first {
+        let e = n.expr();
+        let level = n.shape.level
+            && match &n.shape.op {
+                Op::Call(f) => functions
+                    .iter()
+                    .any(|(g, b)| g.name == f.name && b.keeps_level),
+                Op::Times(_) => false,
+            };
+        for &(f, b) in &functions {
+            if let Op::Call(g) = &n.shape.op {
+                if g.name == f.name && !b.keeps_level {
+                    continue;
+                }
+            }
+            next.extend(shape_of(p, times, f, b, &e, level));
+        }
+        for a in &atoms {
+            next.push(Shape {
+                operand: Some(e.clone()),
+                op: Op::Times(a.expr.clone()),
+                shifted: false,
+                switching: false,
+                ranges: Vec::new(),
+                level: false,
+            });
+        }
+    }
+    let floor = first
+        .iter()
+        .map(|f| f.gain)
+        .fold(f64::NEG_INFINITY, f64::max);
+    among += next.len();
+    let mut second = best(&screen, next, BEAM);
+    // A composition earns its second operator only by explaining more than the best single one.
+    second.retain(|f| f.gain > floor + EARN_NATS);
+
+    let mut all: Vec<Found> = first.into_iter().chain(second).collect();
+    all.retain(|f| f.gain > 0.0 && !covered.contains(&signature(&f.expr().to_string())));
+    all.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+    let mut seen = HashSet::new();
+    all.retain(|f| seen.insert(signature(&f.expr().to_string())));
+    all.truncate(PROPOSED);
+    all.iter().map(|f| family(f, src, among)).collect()
+}
+
+/// The `keep` best of `shapes`: each on its coarse grid, the best refined.
+fn best(screen: &Screen<'_>, shapes: Vec<Shape>, keep: usize) -> Vec<Found> {
+    let mut found: Vec<Found> = shapes
+        .par_iter()
+        .filter_map(|s| coarse(screen, s))
+        .collect();
+    found.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+    found.truncate(keep);
+    found
+        .into_par_iter()
+        .map(|f| refine(f, |e| screen.gain(e)))
+        .collect()
+}
+
+/// The family of a composed candidate: the estimate, and the shape's members through it along
+/// each parameter (what its evidence is marginalised over and each placebo searches).
+fn family(f: &Found, src: &Sources, among: usize) -> Family {
+    let e = f.expr();
+    let mut exprs = vec![e.clone()];
+    let per = per_param(f.u.len());
+    for j in 0..f.u.len() {
+        for i in 0..per {
+            let mut u = f.u.clone();
+            if let Some(x) = u.get_mut(j) {
+                *x = (i as f64 + 0.5) / per as f64;
+            }
+            let m = f.shape.build(&u);
+            if !exprs.contains(&m) {
+                exprs.push(m);
+            }
+        }
+    }
+    let member = |x: &Expr| Candidate {
+        kind: kind_of(x, src),
+        effect: describe_top(x, src),
+        expressions: vec![x.to_string()],
+        parameter: first_parameter(x),
+        replaces: Vec::new(),
+        refines: None,
+    };
+    Family {
+        members: exprs.iter().map(member).collect(),
+        search: None,
+        searched: Searched::Alternatives {
+            members: exprs.iter().map(Expr::to_string).collect(),
+            among,
+        },
+    }
+}
+
+/// The first numeric parameter of the outermost call (for the report).
+fn first_parameter(e: &Expr) -> Option<f64> {
+    match e {
+        Expr::Call(_, args) => args.iter().find_map(|a| match a {
+            Expr::Num(v, _) => Some(*v),
+            _ => None,
+        }),
+        _ => None,
+    }
+}
+
+/// The kind of effect a composition stands for, by its outermost operator.
+fn kind_of(e: &Expr, src: &Sources) -> EffectKind {
+    let thermal = |x: &Expr| names_in(x).iter().all(|n| src.temperatures.contains(n));
+    match e {
+        Expr::Call(f, args) => match (f.as_str(), args.first()) {
+            ("lag", Some(x)) if thermal(x) => EffectKind::LaggedElement,
+            ("lag", _) => EffectKind::NonThermal,
+            ("rate", Some(x)) if thermal(x) => EffectKind::Rate,
+            ("hyst", _) => EffectKind::Hysteresis,
+            ("warmup", _) => EffectKind::Warmup,
+            (_, Some(x)) if thermal(x) => EffectKind::Poly,
+            _ => EffectKind::NonThermal,
+        },
+        Expr::Binary(BinOp::Mul, a, b) if thermal(a) && thermal(b) => EffectKind::Shupe,
+        _ => EffectKind::NonThermal,
+    }
+}
+
+/// The column names an expression reads.
+fn names_in(e: &Expr) -> Vec<String> {
+    match e {
+        Expr::Name(n) => vec![n.clone()],
+        Expr::Neg(a) => names_in(a),
+        Expr::Binary(_, a, b) => names_in(a).into_iter().chain(names_in(b)).collect(),
+        Expr::Call(_, args) => args.iter().flat_map(names_in).collect(),
+        Expr::Num(..) | Expr::Text(_) => Vec::new(),
+    }
+}
+
+/// A number as printed.
+fn n(v: f64) -> String {
+    Expr::num(v).to_string()
+}
+
+/// "τ ≈ 25 min" or "τ ≈ 300 s".
+fn minutes(tau: f64) -> String {
+    if tau >= 600.0 {
+        format!("τ ≈ {} min", n((tau / 60.0).round()))
+    } else {
+        format!("τ ≈ {} s", n(tau.round()))
+    }
+}
+
+/// `x − c` or `x + c` as (`x`, `c`).
+fn shifted_parts(e: &Expr) -> Option<(&Expr, f64)> {
+    match e {
+        Expr::Binary(BinOp::Sub, x, c) => match c.as_ref() {
+            Expr::Num(c, _) => Some((x, *c)),
+            _ => None,
+        },
+        Expr::Binary(BinOp::Add, x, c) => match c.as_ref() {
+            Expr::Num(c, _) => Some((x, -*c)),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The engineer's name of a whole composed candidate.
+fn describe_top(e: &Expr, src: &Sources) -> String {
+    let temperature = |x: &Expr| matches!(x, Expr::Name(name) if src.temperatures.contains(name));
+    match e {
+        Expr::Call(f, args) => match (f.as_str(), args.as_slice()) {
+            ("lag", [x, Expr::Num(t, _)]) if !temperature(x) => {
+                format!("{} acts through a lag of {}", describe(x), minutes(*t))
+            }
+            ("hyst", [s, Expr::Num(h, _)]) => match shifted_parts(s) {
+                Some((x, c)) if temperature(x) => format!(
+                    "bias switches at {} on heating and {} on cooling ({})",
+                    n(significant(c + h, 3)),
+                    n(significant(c - h, 3)),
+                    describe(x)
+                ),
+                _ => describe(e),
+            },
+            _ => describe(e),
+        },
+        _ => describe(e),
+    }
+}
+
+/// The engineer's name of a composition, inside out.
+fn describe(e: &Expr) -> String {
+    match e {
+        Expr::Name(name) => name.clone(),
+        Expr::Num(v, _) => n(*v),
+        Expr::Text(t) => t.clone(),
+        Expr::Neg(a) => format!("−{}", describe(a)),
+        Expr::Binary(BinOp::Sub, a, b) if matches!(b.as_ref(), Expr::Name(_)) => {
+            format!("the gradient {}−{}", describe(a), describe(b))
+        }
+        Expr::Binary(BinOp::Mul, a, b) => format!("{} × {}", describe(a), describe(b)),
+        Expr::Binary(op, a, b) => {
+            let s = match op {
+                BinOp::Add => "+",
+                BinOp::Sub => "−",
+                BinOp::Mul => "×",
+                BinOp::Div => "/",
+            };
+            format!("{} {s} {}", describe(a), describe(b))
+        }
+        Expr::Call(f, args) => match (f.as_str(), args.as_slice()) {
+            ("lag", [x, Expr::Num(t, _)]) => {
+                format!("{} through a lag of {}", describe(x), minutes(*t))
+            }
+            ("rate", [x, ..]) => format!("the rate of {}", describe(x)),
+            ("sq", [x]) => format!("the square of {}", describe(x)),
+            ("abs", [s]) if shifted_parts(s).is_some() => match shifted_parts(s) {
+                Some((x, c)) => format!("a kink in {} at {}", describe(x), n(c)),
+                None => e.to_string(),
+            },
+            ("hyst", [s, Expr::Num(h, _)]) if shifted_parts(s).is_some() => {
+                match shifted_parts(s) {
+                    Some((x, c)) => format!(
+                        "a relay on {} switching at {} rising and {} falling",
+                        describe(x),
+                        n(significant(c + h, 3)),
+                        n(significant(c - h, 3))
+                    ),
+                    None => e.to_string(),
+                }
+            }
+            ("hyst", [x, Expr::Num(h, _)]) => {
+                format!("the rising/falling state of {} (±{})", describe(x), n(*h))
+            }
+            ("clamp", [x, lo, hi]) => format!(
+                "{} saturating outside [{}, {}]",
+                describe(x),
+                describe(lo),
+                describe(hi)
+            ),
+            _ => e.to_string(),
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What each function does to a level is read off the evaluator: lag and rate and the square
+    /// need no shift, a relay and a kink do; a lag keeps a level a level.
+    #[test]
+    fn behaviours_are_measured_not_listed() {
+        let b = |name: &str| lang::function(name).and_then(behaviour).unwrap();
+        assert!(!b("lag").shift_matters && b("lag").keeps_level);
+        assert!(!b("rate").shift_matters && !b("rate").keeps_level);
+        assert!(!b("sq").shift_matters);
+        assert!(b("hyst").shift_matters);
+        assert!(b("abs").shift_matters);
+    }
+
+    #[test]
+    fn signatures_ignore_parameters_not_names() {
+        assert_eq!(signature("lag(t_a1, 1800)"), signature("lag( t_a1 , 2e3)"));
+        assert_ne!(signature("lag(t_a1, 1800)"), signature("lag(t_a2, 1800)"));
+        assert_eq!(signature("hyst(T - 23.5, 4)"), "hyst(T-#)");
+        assert_eq!(signature("rate(a - b)"), signature("rate(a - b, 67)"));
+    }
+
+    #[test]
+    fn a_relay_on_a_shifted_temperature_is_named_by_its_switching_points() {
+        let src = Sources {
+            temperatures: vec!["T".into()],
+            ..Sources::default()
+        };
+        let e = Expr::call("hyst", [Expr::name("T") - Expr::num(30.0), Expr::num(5.0)]);
+        assert_eq!(
+            describe_top(&e, &src),
+            "bias switches at 35 on heating and 25 on cooling (T)"
+        );
+        let l = Expr::call("lag", [Expr::name("supply_v"), Expr::num(240.0)]);
+        assert_eq!(
+            describe_top(&l, &src),
+            "supply_v acts through a lag of τ ≈ 240 s"
+        );
+    }
+
+    #[test]
+    fn grids_cover_every_parameter() {
+        assert_eq!(grid(0).len(), 1);
+        assert_eq!(grid(1).len(), 24);
+        assert_eq!(grid(2).len(), 256);
+        assert!(grid(2).iter().all(|u| u.len() == 2));
+    }
+}

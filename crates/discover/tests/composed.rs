@@ -1,0 +1,187 @@
+//! Effects composed from the language's operators, hidden from a model given the rest of the
+//! truth: a relay on a shifted temperature (a mode hop), the rate of a lagged input, an input
+//! times a rate, a lagged rate, a saturating input, a kink in the bias-temperature curve, … — none
+//! of them a listed family ([`tcomp_discover::compose`] composes them). Each is injected into a
+//! simulated pair of runs by the core's own feature program; the diagnosis must name a
+//! composition of the same shape (the same operators over the same inputs), its parameters
+//! within tolerance of the truth's, and the refit with it must reach the verification run within
+//! 1.2× the noise floor — or within 1.2× of what least squares on the exact truth form reaches,
+//! when that stays above the floor. Every figure is printed beside its limit.
+//!
+//! `cargo test --release -p tcomp-discover --test composed -- --nocapture --test-threads 1`
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
+
+mod support;
+use support::*;
+
+/// One scenario: the sensor's own effects (all given to the model), the seed, the composed effect
+/// hidden from it, and its size in noise floors.
+struct Scenario {
+    name: &'static str,
+    sensor: SensorKind,
+    effects: &'static [EffectKind],
+    seed: u64,
+    hidden: &'static str,
+    multiple: f64,
+    /// With an idle auxiliary column beside the inputs.
+    idle: bool,
+}
+
+/// The numbers of an expression, in order.
+fn numbers(e: &str) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut prev_word = false;
+    for ch in e.chars().chain(std::iter::once(' ')) {
+        if !cur.is_empty() && (ch.is_ascii_digit() || ch == '.' || ch == 'e') {
+            cur.push(ch);
+            continue;
+        }
+        if !cur.is_empty() {
+            out.extend(cur.parse::<f64>().ok());
+            cur.clear();
+        }
+        if ch.is_ascii_digit() && !prev_word {
+            cur.push(ch);
+        }
+        prev_word = ch.is_alphanumeric() || ch == '_';
+    }
+    out
+}
+
+/// The shape of an expression: its text without spaces, every number `#`.
+fn shape(e: &str) -> String {
+    let mut out = String::new();
+    let mut skip = false;
+    let mut prev_word = false;
+    for ch in e.chars().filter(|c| !c.is_whitespace()) {
+        if skip && (ch.is_ascii_digit() || ch == '.' || ch == 'e') {
+            continue;
+        }
+        skip = false;
+        if ch.is_ascii_digit() && !prev_word {
+            out.push('#');
+            skip = true;
+            prev_word = false;
+            continue;
+        }
+        prev_word = ch.is_alphanumeric() || ch == '_';
+        out.push(ch);
+    }
+    out
+}
+
+/// Runs `s`: returns the outcome's text, whether it named the shape, and the ratios after and
+/// at the limit.
+fn run_scenario(s: &Scenario) -> (bool, f64, f64, String) {
+    let mut case = base_case(
+        presets::with_effects(s.sensor, s.effects)
+            .unwrap()
+            .with_seed(s.seed),
+        &[],
+    );
+    if s.idle {
+        case.sim.train = with_idle_input(&case.sim.train, 1);
+        case.sim.verify = with_idle_input(&case.sim.verify, 2);
+    }
+    case.compose = true;
+    let c = scaled(&case, s.hidden, s.multiple);
+    let case = with_injected(case, &[(c, s.hidden.to_string())]);
+    let o = run(&case);
+    let named = o.diagnosis.verdict == Verdict::MissingEffect
+        && o.top()
+            .expressions
+            .iter()
+            .any(|e| shape(e) == shape(s.hidden));
+    let features = if o.diagnosis.verdict == Verdict::MissingEffect {
+        o.top().candidate().applied_to(&case.base)
+    } else {
+        case.base.clone()
+    };
+    let after = after_ratio(&case, &features);
+    let limit = limit_ratio(&case);
+    let text = format!(
+        "{}: hidden `{}`\n{}  after {features:?}: {after:.2}× the floor (limit {limit:.2}×)",
+        s.name, s.hidden, o.text
+    );
+    println!("{text}");
+    if named {
+        let (truth, found) = (numbers(s.hidden), numbers(&o.top().expressions[0]));
+        println!("  parameters {found:?} for {truth:?}");
+    }
+    (named, after, limit, text)
+}
+
+/// Runs `s` and asserts: the verdict names a composition of the hidden one's shape, each of its
+/// parameters within `tol` of the truth's (relative to the truth's size, or to the operand's
+/// size, at least 1), and the refit with it within 1.2× the floor or 1.2× the limit.
+fn check(s: &Scenario, tol: f64) {
+    let (named, after, limit, text) = run_scenario(s);
+    assert!(named, "{text}");
+    assert!(after <= 1.2 * limit.max(1.0), "{text}");
+    let found = numbers(&text_expression(&text));
+    let truth = numbers(s.hidden);
+    assert_eq!(found.len(), truth.len(), "{text}");
+    for (f, t) in found.iter().zip(&truth) {
+        assert!(
+            (f - t).abs() <= tol * t.abs().max(1.0),
+            "{found:?} for {truth:?}\n{text}"
+        );
+    }
+}
+
+/// The expression the verdict says to add (`--feature '…'`).
+fn text_expression(text: &str) -> String {
+    text.split("--feature '")
+        .nth(1)
+        .and_then(|r| r.split('\'').next())
+        .unwrap_or_default()
+        .to_string()
+}
+
+macro_rules! scenarios {
+    ($($(#[$attr:meta])* $test:ident: $name:literal, $sensor:ident, [$($eff:ident),*], $seed:literal, $hidden:literal, $mult:literal, $idle:literal;)+) => {
+        $(
+            #[test]
+            $(#[$attr])*
+            fn $test() {
+                check(&Scenario {
+                    name: $name,
+                    sensor: SensorKind::$sensor,
+                    effects: &[$(EffectKind::$eff),*],
+                    seed: $seed,
+                    hidden: $hidden,
+                    multiple: $mult,
+                    idle: $idle,
+                }, 0.02);
+            }
+        )+
+    };
+}
+
+scenarios! {
+    a_mode_hop_on_heating_and_cooling: "mode hop", Qma, [Poly], 31, "hyst(t_qma_c - 20, 10)", 6.0, false;
+    /// Missed (measured: verdict none, 2.03× the floor where the truth form reaches 1.01×): a
+    /// relay 6 °C wide is too narrow for the coarse screen's grid over an 80 °C range.
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    a_narrow_mode_hop: "narrow mode hop", Qma, [Poly], 32, "hyst(t_qma_c + 5, 3)", 6.0, false;
+    /// Missed (measured: "cannot tell" between `supply_v` and `sq(supply_v)`, 7.5× where the
+    /// truth form reaches 1.18×).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    the_rate_of_a_lagged_input: "rate of a lagged input", Qma, [Poly], 33, "rate(lag(supply_v, 600))", 6.0, true;
+    /// Missed (measured: verdict none, 8.4× where the truth form reaches 1.14×).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    an_input_times_a_rate: "input × rate", Qma, [Poly], 34, "supply_v * rate(t_qma_c)", 6.0, false;
+    a_relay_on_an_input: "relay on an input", Qma, [Poly], 35, "hyst(supply_v - 28.2, 0.2)", 6.0, true;
+    a_saturating_input: "saturating input", Qma, [Poly], 36, "clamp(supply_v, 27.9, 28.3)", 6.0, true;
+    /// Named as the nearest listed shape, `lag(t_qma_c, 1200)` (measured 1.73× where the truth
+    /// form reaches 1.51×).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    a_lagged_rate: "lagged rate", Qma, [Poly], 37, "lag(rate(t_qma_c), 1200)", 6.0, false;
+}
+
+#[test]
+fn shapes_and_numbers_are_read() {
+    assert_eq!(shape("hyst(t_qma_c - 35.5, 6)"), "hyst(t_qma_c-#,#)");
+    assert_eq!(numbers("hyst(t_qma_c - 35.5, 6e1)"), vec![35.5, 60.0]);
+}
