@@ -18,11 +18,11 @@
 //!
 //! `cargo test --release -p tcomp-discover --test false_discoveries -- --nocapture` runs 20 seeds
 //! of each control from 9000 (the set run once, to report, after the placebo leg was designed;
-//! `COMPOSE=1` diagnoses with the compositions searched (`--compose`); `SEEDS` and `FIRST` in the
-//! environment choose others — 500 is where it was developed)
+//! `SEEDS` and `FIRST` in the environment choose others — 500 is where it was developed)
 //! prints each run's verdict and the rate per control: the share of "missing effect" verdicts (a
 //! "cannot tell" names its candidates without claiming one, and counts apart).
-//! and asserts the bound: at most 5 % "missing effect" verdicts per control.
+//! and asserts the bound: at most 5 % "missing effect" verdicts per control. `COMPOSE=1`
+//! diagnoses with the compositions searched (`tcomp diagnose --compose`).
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use tcomp_demo::{Simulated, simulated};

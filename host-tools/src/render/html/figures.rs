@@ -275,6 +275,66 @@ pub(super) fn candidate_plots_in(
         .collect()
 }
 
+/// The profile of each leading candidate's estimated parameter: the training criterion (the log
+/// evidence of the trainer's refit, on the training run alone) against the parameter on a log
+/// scale, with the estimate and the interval of values the run cannot tell apart
+/// ([`tcomp_discover::param`]) — how sharply the run pins τ, a window or a threshold down.
+pub(super) fn profile_plots(a: &Analysis) -> Vec<String> {
+    a.diagnosis
+        .candidates
+        .iter()
+        .take(3)
+        .filter_map(|c| {
+            let e = c.estimate.as_ref()?;
+            let pts: Vec<[f64; 2]> = e
+                .profile
+                .iter()
+                .copied()
+                .filter(|p| p[0] > 0.0 && p[1].is_finite())
+                .collect();
+            if pts.len() < 2 {
+                return None;
+            }
+            let xs: Vec<f64> = pts.iter().map(|p| p[0].log10()).collect();
+            let ys: Vec<f64> = pts.iter().map(|p| p[1]).collect();
+            let what = match e.kind {
+                tcomp_discover::families::ParamKind::TimeConstant => "τ (s)",
+                tcomp_discover::families::ParamKind::Window => "window (s)",
+                tcomp_discover::families::ParamKind::Threshold => "threshold",
+            };
+            let (lo, hi) = range(&ys);
+            let mut p = Plot::new(
+                &format!(
+                    "Profile of {}: {} = {} ({} … {} cannot be told apart{})",
+                    c.effect,
+                    what,
+                    tcomp_train::num::plain(e.value, 2),
+                    tcomp_train::num::plain(e.interval[0], 2),
+                    tcomp_train::num::plain(e.interval[1], 2),
+                    if e.bounded { "" } else { "; not bounded by the run" }
+                ),
+                &format!("log10 {what}"),
+                "log evidence of the refit (training run)",
+                range(&xs),
+                (lo, hi),
+            );
+            p.line(&xs, &ys, "#1f77b4", "profile", false, false);
+            p.dots(&xs, &ys, &["#1f77b4"]);
+            let v = e.value.log10();
+            p.line(&[v, v], &[lo, hi], "#d62728", "estimate", false, false);
+            for (k, b) in e.interval.iter().enumerate() {
+                if *b > 0.0 {
+                    let x = b.log10();
+                    let name = if k == 0 { "interval" } else { "" };
+                    p.line(&[x, x], &[lo, hi], "#7f7f7f", name, false, true);
+                }
+            }
+            p.legend.retain(|(n, _)| !n.is_empty());
+            Some(p.finish())
+        })
+        .collect()
+}
+
 /// The placebo test of each leading candidate that was tested: its placebos' statistics, sorted,
 /// as dots; the candidate's own and the acceptance threshold as lines — what the acceptance was
 /// judged against ([`tcomp_discover::placebo`]). A candidate judged in the second stage shows its

@@ -170,6 +170,9 @@ fn body(h: &mut String, input: &ReportInput<'_>, view: &View<'_>) {
         for s in figures::candidate_plots_in(a, input, view) {
             h.push_str(&s);
         }
+        for s in figures::profile_plots(a) {
+            h.push_str(&s);
+        }
         for s in figures::placebo_plots(a) {
             h.push_str(&s);
         }
