@@ -33,8 +33,14 @@
 //!   Each shape's parameters are searched on a coarse grid; the best shapes are refined by
 //!   golden-section sweeps ([`crate::param::golden`]).
 //!
-//! Pruned by physics: depth two at most; a memoryless function is not applied to its own output
-//! (`abs(abs(x))`, `clamp(clamp(x))` add nothing); a shift only where the function depends on it.
+//! Pruned by physics: depth two at most; a function is not applied to its own output unless it
+//! passes a level through (`abs(abs(x))`, `clamp(clamp(x))` add nothing; two lags in series are a
+//! second-order path); a shift only where the function depends on it; and no memoryless function
+//! (the language's table says which are stateless) of temperatures alone: a kink, a saturation or
+//! a square in temperature is a shape of the bias–temperature curve, which the model's own terms
+//! in temperature fit — not a missing signal (measured: with them, a drifting run with a case
+//! thermometer got `abs(t_case_c + 28)` and `clamp(t_case_c, 37.4, 48.8)` named, 2 of 20 fresh
+//! seeds, and a lag hidden in a gappy log was named as a kink of the lag).
 //! Pruned by evidence: only the [`BEAM`] best depth-one shapes are composed again, and only the
 //! [`PROPOSED`] best shapes that no listed family already covers are handed on. They are then
 //! scored, refitted, placebo-tested — each placebo the best of the same shape's members on the
@@ -657,12 +663,17 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
         .filter_map(|f| behaviour(f).map(|b| (f, b)))
         .collect();
     let atoms = atoms(src);
+    // A memoryless function of temperatures alone is a shape of the bias–temperature curve,
+    // which the model's own terms in temperature fit (a kink, a saturation, a square): not a
+    // missing effect. A stateful one (a relay, a lag, a rate) is a signal the model lacks.
+    let thermal = |e: &Expr| names_in(e).iter().all(|n| src.temperatures.contains(n));
+    let allowed = |f: &Function, operand: &Expr| f.stateful || !thermal(operand);
 
     // Depth one: every function over every atom, the products of two atoms, and the functions of
     // time alone.
     let mut shapes: Vec<Shape> = Vec::new();
     for a in &atoms {
-        for &(f, b) in &functions {
+        for &(f, b) in functions.iter().filter(|(f, _)| allowed(f, &a.expr)) {
             shapes.extend(shape_of(p, times, f, b, &a.expr, a.level));
         }
     }
@@ -709,7 +720,7 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
                     .any(|(g, b)| g.name == f.name && b.keeps_level),
                 Op::Times(_) => false,
             };
-        for &(f, b) in &functions {
+        for &(f, b) in functions.iter().filter(|(f, _)| allowed(f, &e)) {
             if let Op::Call(g) = &n.shape.op {
                 if g.name == f.name && !b.keeps_level {
                     continue;

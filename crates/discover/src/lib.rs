@@ -91,7 +91,7 @@ pub fn model_info(model: &HostModel<'_>) -> ModelInfo {
 }
 
 /// Options of [`diagnose`].
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct DiagnoseOptions {
     /// Scoring.
     pub score: score::ScoreOptions,
@@ -103,10 +103,22 @@ pub struct DiagnoseOptions {
     pub temperature: Option<String>,
     /// Override of the model's roles (reference column or value).
     pub roles: Option<Roles>,
-    /// Also search the compositions of the language's functions ([`compose`]): off by default
-    /// until its candidates no longer raise the placebo threshold that the listed families are
-    /// judged against (measured: the hidden gappy lag is then named as a kink of the lag).
+    /// Also search the compositions of the language's functions ([`compose`]), for effects no
+    /// family lists (on by default; `tcomp diagnose --no-compose` turns it off).
     pub compose: bool,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        DiagnoseOptions {
+            score: score::ScoreOptions::default(),
+            criterion: Criterion::default(),
+            confirm: confirm::ConfirmOptions::default(),
+            temperature: None,
+            roles: None,
+            compose: true,
+        }
+    }
 }
 
 impl DiagnoseOptions {

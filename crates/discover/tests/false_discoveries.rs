@@ -21,8 +21,8 @@
 //! `SEEDS` and `FIRST` in the environment choose others — 500 is where it was developed)
 //! prints each run's verdict and the rate per control: the share of "missing effect" verdicts (a
 //! "cannot tell" names its candidates without claiming one, and counts apart).
-//! and asserts the bound: at most 5 % "missing effect" verdicts per control. `COMPOSE=1`
-//! diagnoses with the compositions searched (`tcomp diagnose --compose`).
+//! and asserts the bound: at most 5 % "missing effect" verdicts per control. `NO_COMPOSE=1`
+//! diagnoses with the listed effects alone (`tcomp diagnose --no-compose`).
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
 use tcomp_demo::{Simulated, simulated};
@@ -108,7 +108,7 @@ fn verdict(sim: &Simulated) -> (Verdict, String) {
     let bytes = fitted.model.to_bytes().unwrap();
     let model = tcomp_train::blob_io::decode("m.tcm".as_ref(), &bytes).unwrap();
     let opts = DiagnoseOptions {
-        compose: env("COMPOSE", 0) == 1,
+        compose: env("NO_COMPOSE", 0) != 1,
         ..DiagnoseOptions::default()
     };
     let a = diagnose(&model, &sim.train, Some(&sim.verify), &opts).unwrap();

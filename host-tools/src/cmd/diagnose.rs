@@ -36,10 +36,10 @@ pub struct Args {
     /// turns the leg off.
     #[arg(long, default_value_t = tcomp_discover::placebo::PLACEBOS, allow_negative_numbers = true, value_parser = crate::args::check::placebos)]
     pub placebos: usize,
-    /// Also search compositions of the feature language's functions over every input (a relay on
-    /// a shifted temperature, a saturating input, a lagged rate, …), not only the listed effects.
+    /// Only the listed effects: do not search compositions of the feature language's functions
+    /// over every input (a relay on a shifted temperature, a saturating input, a lagged rate, …).
     #[arg(long)]
-    pub compose: bool,
+    pub no_compose: bool,
     /// Candidates printed.
     #[arg(long, default_value_t = 10, allow_negative_numbers = true, value_parser = crate::args::check::top)]
     pub top: usize,
@@ -120,7 +120,7 @@ fn prepare(args: &Args) -> anyhow::Result<Prepared> {
     opts.criterion.min_delta_log_evidence = args.min_evidence;
     opts.criterion.min_improvement_pct = args.min_improvement;
     opts.criterion.placebos = args.placebos;
-    opts.compose = args.compose;
+    opts.compose = !args.no_compose;
     opts.temperature.clone_from(&args.temperature);
     if args.run.overrides_reference() {
         opts.roles = Some(roles);

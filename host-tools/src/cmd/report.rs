@@ -91,7 +91,7 @@ fn diagnose(
         min_evidence: 5.0,
         min_improvement: 5.0,
         placebos: tcomp_discover::placebo::PLACEBOS,
-        compose: false,
+        no_compose: false,
         top: 10,
         rounds: 1,
         json: false,

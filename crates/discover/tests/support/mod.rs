@@ -326,7 +326,7 @@ pub fn base_case(preset: tcomp_sim::Preset, hidden: &[EffectKind]) -> Case {
         base,
         sim,
         gap_s: None,
-        compose: false,
+        compose: true,
     }
 }
 

@@ -311,7 +311,11 @@ pub(super) fn profile_plots(a: &Analysis) -> Vec<String> {
                     tcomp_train::num::plain(e.value, 2),
                     tcomp_train::num::plain(e.interval[0], 2),
                     tcomp_train::num::plain(e.interval[1], 2),
-                    if e.bounded { "" } else { "; not bounded by the run" }
+                    if e.bounded {
+                        ""
+                    } else {
+                        "; not bounded by the run"
+                    }
                 ),
                 &format!("log10 {what}"),
                 "log evidence of the refit (training run)",
