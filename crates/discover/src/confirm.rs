@@ -277,6 +277,9 @@ pub struct Runs<'a> {
     pub run: Option<&'a metrics::Run>,
 }
 
+/// Compositions refitted besides the listed families' leading candidates.
+pub const COMPOSED_REFITS: usize = 2;
+
 /// Refits the leading candidates (their parameters estimated first, on the binned training run of
 /// `prepared`) and replaces their held-out figures with the real ones; every other candidate is
 /// marked unconfirmed. The refits split the run at the gaps `prepared` does.
@@ -307,7 +310,24 @@ pub fn confirm(
             .delta_log_evidence
             .total_cmp(&cands[a].delta_log_evidence)
     });
-    order.truncate(opts.top);
+    // The compositions ([`crate::compose`]) have slots of their own: a search of many shapes must
+    // not crowd the listed families out of their refits (measured: the demo's Shupe term, judged
+    // on its held-out refits, lost its slot to three compositions and went unnamed).
+    let composed =
+        |i: &usize| matches!(cands[*i].searched, crate::candidates::Searched::Alternatives { .. });
+    let listed: Vec<usize> = order
+        .iter()
+        .copied()
+        .filter(|i| !composed(i))
+        .take(opts.top)
+        .collect();
+    let compositions: Vec<usize> = order
+        .iter()
+        .copied()
+        .filter(composed)
+        .take(COMPOSED_REFITS)
+        .collect();
+    order.retain(|i| listed.contains(i) || compositions.contains(i));
     let mut leading: Vec<Scored> = order
         .iter()
         .filter_map(|&i| cands.get(i).cloned())

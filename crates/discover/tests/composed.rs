@@ -177,6 +177,11 @@ scenarios! {
     /// Named as the nearest listed shape, `lag(t_qma_c, 1200)` (measured 1.73× where the truth
     /// form reaches 1.51×).
     #[ignore = "a known miss: run with --ignored to measure it"]
+    a_mode_hop_seen_through_a_lag: "mode hop of a lagging element", Qma, [Poly], 38, "hyst(lag(t_qma_c, 1800) - 15, 8)", 6.0, false;
+    a_lagged_relay_on_an_input: "lagged relay on an input", Qma, [Poly], 39, "lag(hyst(supply_v - 28.2, 0.2), 600)", 6.0, true;
+    an_input_times_temperature: "input × temperature", Qma, [Poly], 40, "supply_v * t_qma_c", 6.0, false;
+    the_rate_of_an_input: "rate of an input", Qma, [Poly], 41, "rate(supply_v, 600)", 6.0, true;
+    a_relay_on_a_gradients_rate: "relay on a gradient's rate", Rlg, [Poly], 42, "hyst(rate(t_anode_c - t_shell_c), 0.05)", 6.0, false;
     a_lagged_rate: "lagged rate", Qma, [Poly], 37, "lag(rate(t_qma_c), 1200)", 6.0, false;
 }
 

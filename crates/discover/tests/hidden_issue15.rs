@@ -12,6 +12,8 @@
 
 mod support;
 use support::*;
+use tcomp_discover::diagnose_rounds;
+use tcomp_discover::families::{kind_named, language_has};
 
 /// A QMA whose proof mass lags its thermometer by τ = 30 min in *every* temperature term: the
 /// polynomial and the rate are of `lag(t_qma_c, 1800)`. The model has `t_qma_c` and its rate.

@@ -12,9 +12,8 @@
 pub use nalgebra::{DMatrix, DVector};
 pub use tcomp_core::expr::{self, Expr};
 pub use tcomp_demo::{Simulated, simulated};
-pub use tcomp_discover::families::{kind_named, language_has};
 pub use tcomp_discover::score::Scored;
-pub use tcomp_discover::{DiagnoseOptions, Diagnosis, Verdict, diagnose, diagnose_rounds};
+pub use tcomp_discover::{DiagnoseOptions, Diagnosis, Verdict, diagnose};
 pub use tcomp_sim::{EffectKind, SensorKind, presets};
 pub use tcomp_train::dataset::segments;
 pub use tcomp_train::features::{self, FeatureSpec, bin_mean, bins};
