@@ -4,7 +4,7 @@
 //! core's feature program over it (the code the firmware runs) and [`binning`] averages the rows
 //! into time bins; a method fits an RBF in f64 —
 //! [`bayes`] (default, MacKay evidence), [`mse`] (centers by k-means or [`ols`]), [`gradient`] or
-//! the [`poly3`] baseline, each an implementation of [`method::FitMethod`]; [`blob_io`]
+//! the [`poly3`] baseline, each an implementation of [`method::FitMethod`] listed in [`registry`]; [`blob_io`]
 //! stores it as the core's blob; [`metrics`] measures it by running the decoded blob through the
 //! core's f32 `Channel`. [`train::fit`] ties it together for `tcomp fit`; [`spec`] reads the TOML spec.
 //!
@@ -52,6 +52,7 @@ pub mod pin;
 pub mod poly3;
 pub mod progress;
 pub mod rbf64;
+pub mod registry;
 pub mod rows;
 pub mod spec;
 pub mod stream;
@@ -63,4 +64,6 @@ pub use error::TrainError;
 pub use metrics::{EvalReport, Roles};
 pub use spec::{ChannelOptions, FeatureOptions, MethodOptions, RunOptions, Spec};
 pub use stream::{StreamOptions, eval_stream, eval_stream_reader};
-pub use train::{FitOptions, FitSummary, Fitted, Method, evaluate, fit, fit_with_progress};
+pub use train::{
+    FitOptions, FitSummary, Fitted, Method, MethodSettings, evaluate, fit, fit_with_progress,
+};

@@ -165,7 +165,7 @@ fn check_options(opts: &FitOptions, method: &dyn FitMethod) -> Result<(), TrainE
     if let Some(g) = opts.gap_s {
         options::GAP.check(g)?;
     }
-    method.check(opts)
+    method.check(&opts.shared())
 }
 
 /// The feature columns of `spec` over the selected rows (one column per feature: a row per sample
@@ -210,7 +210,7 @@ pub(crate) fn check_samples(
     have: usize,
     after: String,
 ) -> Result<(), TrainError> {
-    let need = method.min_samples(opts);
+    let need = method.min_samples(&opts.shared());
     if have >= need {
         return Ok(());
     }
@@ -229,7 +229,7 @@ pub(crate) fn prepare(
     data: &Dataset,
     opts: &FitOptions,
 ) -> Result<(TrainingSet, Prepared), TrainError> {
-    let method = opts.method.fitter();
+    let method = opts.fitter();
     let Selection {
         data,
         error,
@@ -243,7 +243,7 @@ pub(crate) fn prepare(
     let average_s = averaging(opts, &data, time)?;
     let b = bins(time, average_s);
     check_memory(opts, time, b.len(), &data)?;
-    let spec = method.program(opts, &data, &starts, &mut warnings)?;
+    let spec = method.program(&opts.shared(), &data, &starts, &mut warnings)?;
     gap_warnings(&spec, &data, time, &starts, &mut warnings)?;
     let (columns, ranges) = feature_columns(&spec, &data, time, &starts, time_on_s)?;
     // Too few rows is said as such (after any bad cell they hold), before a feature over them
@@ -349,17 +349,18 @@ pub(crate) struct Prepared {
     pub(crate) average_s: f64,
 }
 
-/// The shape of a fit of `samples` training samples over `rows` rows with `opts`.
-fn shape(opts: &FitOptions, rows: usize, samples: usize) -> crate::budget::Shape {
-    crate::budget::Shape {
+/// The estimated peak memory of a fit of `samples` training samples over `rows` rows with `opts`
+/// (see [`crate::budget::estimate`]), bytes.
+fn estimate(opts: &FitOptions, rows: usize, samples: usize) -> u64 {
+    let method = opts.fitter();
+    let shape = crate::budget::Shape {
         rows,
         samples,
-        features: opts.method.fitter().features_fitted(opts),
-        method: opts.method,
+        features: method.features_fitted(&opts.shared()),
         centers: opts.centers,
-        select: opts.select,
         threads: rayon::current_num_threads(),
-    }
+    };
+    crate::budget::estimate(&shape, method.memory(&shape))
 }
 
 /// Refuses a fit whose estimated memory is over `opts.memory_budget`, suggesting the shortest
@@ -370,8 +371,8 @@ fn check_memory(
     samples: usize,
     data: &Dataset,
 ) -> Result<(), TrainError> {
-    use crate::budget::{estimate, human};
-    let need = estimate(&shape(opts, time.len(), samples));
+    use crate::budget::human;
+    let need = estimate(opts, time.len(), samples);
     if need <= opts.memory_budget {
         return Ok(());
     }
@@ -380,7 +381,7 @@ fn check_memory(
     let suggestion = [1.0, 2.0, 5.0, 10.0, 30.0, 60.0, 120.0, 300.0, 600.0]
         .into_iter()
         .filter(|&a| a >= step && a > opts.average_s.unwrap_or(0.0))
-        .find(|&a| estimate(&shape(opts, time.len(), bins(time, a).len())) <= opts.memory_budget);
+        .find(|&a| estimate(opts, time.len(), bins(time, a).len()) <= opts.memory_budget);
     let averaged = match opts.average_s {
         Some(a) if a > 0.0 => format!("averaged into {a} s bins"),
         Some(_) => "unaveraged".to_string(),
@@ -400,7 +401,7 @@ fn check_memory(
                     "; average into bins (e.g. --average {a}, which needs {}; without --average \
                      the default is {DEFAULT_AVERAGE_S} s), or pick a shorter window with \
                      --from/--until",
-                    human(estimate(&shape(opts, time.len(), bins(time, a).len())))
+                    human(estimate(opts, time.len(), bins(time, a).len()))
                 ),
                 None => "; pick a shorter window with --from/--until".to_string(),
             },

@@ -1,7 +1,8 @@
 //! `fit`: from a dataset and options to a blob, with a summary — the trainer's front door.
 //!
 //! Why here and not in the CLI: tests and benchmarks call exactly what `tcomp fit` runs. This module
-//! only orchestrates; what differs between methods is the method's ([`crate::method::FitMethod`]).
+//! only orchestrates; what differs between methods is the method's ([`crate::method::FitMethod`], found in
+//! [`crate::registry`]).
 //! The steps: select the window and check the column roles and time, find the gaps (warn; feature
 //! state is carried across them, or restarted after a long one), let the method rewrite the program (poly3), run the core's feature
 //! program over every row, check that features vary and are not collinear, record their ranges,
@@ -20,7 +21,8 @@ use serde::Serialize;
 use tcomp_core::ResidualLevel;
 
 pub use crate::fit_options::{FitOptions, parse_sensor};
-pub use crate::method::{DEFAULT_CENTERS, Method};
+pub use crate::method::DEFAULT_CENTERS;
+pub use crate::registry::{Method, MethodSettings};
 pub use crate::rows::training_rows;
 
 /// Default averaging bin before fitting (s), shortened to leave at least [`MIN_DEFAULT_BINS`] bins.
@@ -93,7 +95,6 @@ pub fn fit_with_progress(
         0,
         crate::progress::Unit::Iterations,
     );
-    let method = opts.method.fitter();
     // Structure pins (`linear:`, `additive:`) come off the feature expressions here.
     let (features, pins) = crate::pin::split(&opts.spec.features)?;
     let mut stripped;
@@ -111,8 +112,9 @@ pub fn fit_with_progress(
     } else {
         String::new()
     };
+    let method = opts.fitter();
     check_samples(method, opts, &set.data, set.y.len(), after)?;
-    let fitted = method.fit(&mut set, opts, progress)?;
+    let fitted = method.fit(&mut set, &opts.shared(), progress)?;
     finish(set, prepared, fitted, opts)
 }
 
