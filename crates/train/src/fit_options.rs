@@ -41,8 +41,8 @@ pub struct FitOptions {
     pub spec: FeatureSpec,
     /// Method.
     pub method: Method,
-    /// Averaging bin (s), 0 for none; `None`: [`DEFAULT_AVERAGE_S`], shortened on short runs to
-    /// leave [`MIN_DEFAULT_BINS`] bins.
+    /// Averaging bin (s), 0 for none; `None`: [`crate::rows::DEFAULT_AVERAGE_S`], shortened on
+    /// short runs to leave [`crate::rows::MIN_DEFAULT_BINS`] bins.
     pub average_s: Option<f64>,
     /// Each method's own options (unset: the method's default), e.g. `settings.bayes.cubic`;
     /// [`Method::fitter`] hands the selected method its own.

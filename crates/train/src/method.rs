@@ -204,4 +204,3 @@ impl FromStr for CenterSelection {
         }
     }
 }
-

@@ -9,8 +9,8 @@
 
 use crate::error::TrainError;
 use crate::kmeans::{dist2, kmeans};
-use crate::rbf64::{Rbf64, design, least_squares, mean_std, normalise_rows, split_weights};
 pub use crate::method::CenterSelection;
+use crate::rbf64::{Rbf64, design, least_squares, mean_std, normalise_rows, split_weights};
 use serde::Deserialize;
 
 /// Width heuristic `σ = d_max/√(2M)`; 1 with fewer than two centers.

@@ -23,16 +23,8 @@ use tcomp_core::ResidualLevel;
 pub use crate::fit_options::{FitOptions, parse_sensor};
 pub use crate::method::DEFAULT_CENTERS;
 pub use crate::registry::{Method, MethodSettings};
-pub use crate::rows::training_rows;
+pub use crate::rows::{DEFAULT_AVERAGE_S, MIN_DEFAULT_BINS, training_rows};
 
-/// Default averaging bin before fitting (s), shortened to leave at least [`MIN_DEFAULT_BINS`] bins.
-/// Bias instability makes 1 Hz samples strongly correlated, and the evidence computed as if they
-/// were independent is overconfident: on the simulated QMA run, 30 s bins let the evidence pick 32
-/// narrow centers that learn a spurious temperature × rate interaction (held-out residual 17× the
-/// noise floor), while 120 s bins give 1.13× (measured). A 6-hour run still gives 180 bins.
-pub const DEFAULT_AVERAGE_S: f64 = 120.0;
-/// The default averaging is shortened on short runs so that at least this many bins remain.
-pub const MIN_DEFAULT_BINS: f64 = 60.0;
 /// Bin length of the residual level stored in the blob and of binned figures (s).
 pub const REPORT_BIN_S: f64 = 100.0;
 

@@ -215,9 +215,19 @@ mod tests {
             let m = cmd.clone().try_get_matches_from(argv).ok()?;
             <Args as clap::FromArgMatches>::from_arg_matches(&m).ok()
         };
-        let plain = parse(&[]).map(|a| (a.method.settings.bayes.linear, a.method.settings.bayes.cubic));
+        let plain = parse(&[]).map(|a| {
+            (
+                a.method.settings.bayes.linear,
+                a.method.settings.bayes.cubic,
+            )
+        });
         assert_eq!(plain, Some((None, None)));
-        let off = parse(&["--no-linear", "--no-cubic"]).map(|a| (a.method.settings.bayes.linear, a.method.settings.bayes.cubic));
+        let off = parse(&["--no-linear", "--no-cubic"]).map(|a| {
+            (
+                a.method.settings.bayes.linear,
+                a.method.settings.bayes.cubic,
+            )
+        });
         assert_eq!(off, Some((Some(false), Some(false))));
         let mut file = Spec::default();
         file.method.settings.bayes.linear = Some(false);
