@@ -10,7 +10,7 @@ use crate::rbf64::C;
 use crate::units::{self, Relation};
 use std::io::Write;
 use std::path::Path;
-use tcomp_core::{ColumnRoles, FeatureRange, Meta, Model, Rbf, ResidualLevel, SensorKind};
+use tcomp_core::{ColumnRoles, FeatureRange, Meta, Model, Program, Rbf, ResidualLevel, SensorKind};
 
 /// A decoded model at the host capacities (the core's one alias: centers, features and program
 /// nodes are named once, in `tcomp_core::HOST_*`).
@@ -108,7 +108,15 @@ pub struct OwnedModel {
 impl OwnedModel {
     /// The core model, borrowing from `self`.
     pub fn model(&self) -> Result<HostModel<'_>, TrainError> {
-        let program = self.spec.program()?;
+        self.model_with(self.spec.program()?)
+    }
+
+    /// [`OwnedModel::model`] with `program`, [`OwnedModel::spec`] already compiled (a fit
+    /// compiles it once for its two encodings).
+    fn model_with<'a>(
+        &'a self,
+        program: Program<'a, { crate::features::N }, F>,
+    ) -> Result<HostModel<'a>, TrainError> {
         let mut ranges = heapless::Vec::new();
         for r in &self.ranges {
             ranges.push(*r).map_err(|_| TrainError::OverCapacity {
@@ -143,7 +151,19 @@ impl OwnedModel {
 
     /// The encoded blob.
     pub fn to_bytes(&self) -> Result<Vec<u8>, TrainError> {
-        let model = self.model()?;
+        self.encode(self.model()?)
+    }
+
+    /// [`OwnedModel::to_bytes`] with `program`, which must be [`OwnedModel::spec`] compiled
+    /// (`spec.program()`): the trainer compiles the stored program once per fit.
+    pub(crate) fn to_bytes_with(
+        &self,
+        program: &Program<'_, { crate::features::N }, F>,
+    ) -> Result<Vec<u8>, TrainError> {
+        self.encode(self.model_with(program.clone())?)
+    }
+
+    fn encode(&self, model: HostModel<'_>) -> Result<Vec<u8>, TrainError> {
         let mut buf = vec![0u8; MAX_BLOB];
         let len = model.encode(&mut buf).map_err(|e| TrainError::Blob {
             context: "cannot encode the model".into(),

@@ -14,7 +14,7 @@ use crate::fit_options::FitOptions;
 use crate::method::{FitMethod, TrainingSet};
 use crate::metrics::Roles;
 use crate::options;
-use tcomp_core::FeatureRange;
+use tcomp_core::{FeatureRange, Program};
 
 /// Default averaging bin before fitting (s), shortened to leave at least [`MIN_DEFAULT_BINS`] bins.
 /// Bias instability makes 1 Hz samples strongly correlated, and the evidence computed as if they
@@ -180,15 +180,14 @@ fn check_options(opts: &FitOptions, method: &dyn FitMethod) -> Result<(), TrainE
 /// The feature columns of `spec` over the selected rows (one column per feature: a row per sample
 /// would be 22,000 small allocations on a 6-hour run), and each feature's trained range.
 fn feature_columns(
-    spec: &FeatureSpec,
+    program: &Program<'_, { features::N }, { features::F }>,
     data: &Dataset,
     time: &[f64],
     starts: &[usize],
     time_on_s: f64,
 ) -> Result<(Vec<Vec<f64>>, Vec<FeatureRange>), TrainError> {
-    let program = spec.program()?;
     let nf = program.n_features();
-    let feats = features::compute_from(&program, data, time, starts, time_on_s)?;
+    let feats = features::compute_from(program, data, time, starts, time_on_s)?;
     let columns: Vec<Vec<f64>> = (0..nf)
         .map(|k| {
             feats
@@ -253,8 +252,12 @@ pub(crate) fn prepare(
     let b = bins(time, average_s);
     check_memory(opts, time, b.len(), &data)?;
     let spec = method.program(&opts.shared(), &data, &starts, &mut warnings)?;
-    gap_warnings(&spec, &data, time, &starts, &mut warnings)?;
-    let (columns, ranges) = feature_columns(&spec, &data, time, &starts, time_on_s)?;
+    // Compiled once, for the gaps' warnings and the feature columns.
+    let (columns, ranges) = {
+        let program = spec.program()?;
+        gap_warnings(&program, &data, time, &starts, &mut warnings)?;
+        feature_columns(&program, &data, time, &starts, time_on_s)?
+    };
     // Too few rows is said as such (after any bad cell they hold), before a feature over them
     // looks constant.
     check_samples(method, opts, &data, time.len(), " (rows)".to_string())?;
@@ -320,7 +323,7 @@ fn sub_rows(columns: &[Vec<f64>], bins: &[(usize, usize)]) -> Vec<Vec<Vec<f64>>>
 /// The gaps of the record: one line for those the feature state is carried across, one per gap
 /// that restarts it (longer than 5× the program's longest time constant), naming the row.
 fn gap_warnings(
-    spec: &FeatureSpec,
+    program: &Program<'_, { features::N }, { features::F }>,
     data: &Dataset,
     time: &[f64],
     starts: &[usize],
@@ -330,8 +333,7 @@ fn gap_warnings(
     if gaps == 0 {
         return Ok(());
     }
-    let program = spec.program()?;
-    let restarting = features::restarting_gaps(&program, time, starts);
+    let restarting = features::restarting_gaps(program, time, starts);
     let carried = gaps - restarting.len();
     if carried > 0 {
         warnings.push(format!(

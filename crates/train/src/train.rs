@@ -156,10 +156,14 @@ fn finish(
             bin_s: REPORT_BIN_S as f32,
         },
     };
-    let train = measure(&model, &data, opts)?;
+    // The stored program, compiled once for both encodings (the method may have replaced the
+    // one the rows were computed with: bayes choosing the cubic).
+    let program = model.spec.program()?;
+    let train = measure(&model.to_bytes_with(&program)?, &data, opts)?;
     model.residual.std = train.residual_std as f32;
     model.residual.binned_std = train.binned.residual_std as f32;
-    let final_bytes = model.to_bytes()?;
+    let final_bytes = model.to_bytes_with(&program)?;
+    drop(program);
     if let Err(e) =
         crate::blob_io::check_flight(std::path::Path::new("the new model"), &final_bytes)
     {
@@ -186,14 +190,10 @@ fn finish(
     Ok(Fitted { model, summary })
 }
 
-/// The training figures of `model`, through its decoded blob and the core's `Channel`.
-fn measure(
-    model: &OwnedModel,
-    data: &Dataset,
-    opts: &FitOptions,
-) -> Result<EvalReport, TrainError> {
-    let bytes = model.to_bytes()?;
-    let decoded = crate::blob_io::decode(std::path::Path::new("<new model>"), &bytes)?;
+/// The training figures of the model encoded as `bytes`, through its decoded blob and the core's
+/// `Channel`.
+fn measure(bytes: &[u8], data: &Dataset, opts: &FitOptions) -> Result<EvalReport, TrainError> {
+    let decoded = crate::blob_io::decode(std::path::Path::new("<new model>"), bytes)?;
     let roles = Roles {
         power_on_s: opts.power_on_s,
         ..Roles::of_model(&decoded)

@@ -136,10 +136,10 @@ fn cycle(g: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
     }
     let mut state = BTreeMap::new();
     for m in g.keys() {
-        if state.get(m).copied().unwrap_or(0) == 0 {
-            if let Some(c) = visit(m, g, &mut state, &mut Vec::new()) {
-                return Some(c);
-            }
+        if state.get(m).copied().unwrap_or(0) == 0
+            && let Some(c) = visit(m, g, &mut state, &mut Vec::new())
+        {
+            return Some(c);
         }
     }
     None
