@@ -166,9 +166,8 @@ fn respell_units(board: &Board, blobs: &[ChannelBlob]) -> anyhow::Result<Vec<Cha
             );
             drop(m);
             if unit_only
-                && let Some(bytes) =
-                    tcomp_train::units::respell_blob(&b.path, &b.bytes, row.unit)
-                        .with_context(|| format!("{}: channel {} ({})", b.label, b.id, row.name))?
+                && let Some(bytes) = tcomp_train::blob_io::respell_blob(&b.path, &b.bytes, row.unit)
+                    .with_context(|| format!("{}: channel {} ({})", b.label, b.id, row.name))?
             {
                 b.bytes = bytes;
             }

@@ -163,7 +163,7 @@ impl<'a> Refits<'a> {
         o.spec.features = features.to_vec();
         // The joint model's evidence only: refits of different feature sets are compared on it,
         // and the additive structure's (under AR(1) noise) is another yardstick.
-        o.additive = false;
+        o.settings.bayes.additive = Some(false);
         o
     }
 

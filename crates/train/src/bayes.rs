@@ -50,12 +50,13 @@
 mod additive;
 mod search;
 
-pub use additive::StructureReport;
+pub use crate::evidence::Evidence;
+pub use crate::method::{Basis, StructureReport};
 
 use crate::rbf64::{Rbf64, mean_std, split_weights};
 use nalgebra::{DMatrix, DVector};
 use search::Search;
-use serde::Serialize;
+use serde::Deserialize;
 
 /// Options of the evidence search.
 #[derive(Clone, Debug)]
@@ -87,23 +88,6 @@ impl Default for BayesOptions {
     }
 }
 
-/// Hyperparameters and evidence of one converged fit (in the target's units).
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct Evidence {
-    /// Prior precision of the Gaussian weights.
-    pub alpha: f64,
-    /// Prior precision of the linear weights (0 when there is no linear term).
-    pub alpha_linear: f64,
-    /// Noise precision (1/variance of the fitted samples, i.e. of the bin means).
-    pub beta: f64,
-    /// Effective number of parameters, including the bias.
-    pub gamma: f64,
-    /// Log evidence ln p(y | α, β, model).
-    pub log_evidence: f64,
-    /// Iterations until convergence.
-    pub iterations: usize,
-}
-
 /// The chosen model and how it was chosen.
 #[derive(Clone, Debug)]
 pub struct BayesFit {
@@ -124,18 +108,6 @@ pub struct BayesFit {
     pub other_basis_log_evidence: Option<f64>,
     /// The structure chosen (joint, additive, cubic, linear) and every structure compared.
     pub structure: StructureReport,
-}
-
-/// Which basis a Bayesian fit uses besides the bias and the linear term.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Basis {
-    /// Gaussian radial basis functions (possibly none: the linear term alone).
-    #[default]
-    Gaussians,
-    /// `T²` and `T³` of the first feature clamped to its trained range (the PX4/ArduPilot cubic),
-    /// under the same prior as the linear term, and no Gaussians.
-    Cubic,
 }
 
 #[derive(Clone)]
@@ -373,8 +345,53 @@ impl CubicCandidate {
     }
 }
 
-/// The `bayes` method (the default).
-pub struct Bayes;
+crate::layer! {
+    /// The `bayes` method (the default), with its own options: keys of the fit spec and (with the
+    /// `cli` feature) flags, unset for the default.
+    #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+    #[cfg_attr(feature = "cli", derive(clap::Args))]
+    #[serde(rename_all = "kebab-case")]
+    pub struct Bayes {
+        /// No linear term (bayes); spec key `linear = false`.
+        #[cfg_attr(
+            feature = "cli",
+            arg(long = "no-linear", num_args = 0, default_missing_value = "false")
+        )]
+        pub linear: Option<bool>,
+        /// Do not offer bayes the cubic in the first feature as a basis (it is chosen only when
+        /// the Gaussians do not beat it by ln 20 in log evidence); spec key `cubic = false`.
+        #[cfg_attr(
+            feature = "cli",
+            arg(long = "no-cubic", num_args = 0, default_missing_value = "false")
+        )]
+        pub cubic: Option<bool>,
+        /// Do not offer bayes the additive structure (one-feature Gaussians placed one by one
+        /// beside the linear term, judged under AR(1) noise; chosen only by evidence); spec key
+        /// `additive = false`.
+        #[cfg_attr(
+            feature = "cli",
+            arg(long = "no-additive", num_args = 0, default_missing_value = "false")
+        )]
+        pub additive: Option<bool>,
+    }
+}
+
+impl Bayes {
+    /// Whether the linear term is on [default: yes].
+    pub fn linear(&self) -> bool {
+        self.linear.unwrap_or(true)
+    }
+
+    /// Whether the cubic in the first feature is offered as a basis [default: yes].
+    pub fn cubic(&self) -> bool {
+        self.cubic.unwrap_or(true)
+    }
+
+    /// Whether the additive structure is offered beside the joint model [default: yes].
+    pub fn additive(&self) -> bool {
+        self.additive.unwrap_or(true)
+    }
+}
 
 impl crate::method::FitMethod for Bayes {
     fn name(&self) -> &'static str {
@@ -386,7 +403,7 @@ impl crate::method::FitMethod for Bayes {
          with the cubic in the first feature (--no-cubic turns that off)"
     }
 
-    fn min_samples(&self, _opts: &crate::train::FitOptions) -> usize {
+    fn min_samples(&self, _opts: &crate::method::Shared<'_>) -> usize {
         10
     }
 
@@ -407,12 +424,12 @@ impl crate::method::FitMethod for Bayes {
     fn fit(
         &self,
         set: &mut crate::method::TrainingSet,
-        opts: &crate::train::FitOptions,
+        opts: &crate::method::Shared<'_>,
         _progress: &dyn crate::progress::Progress,
     ) -> Result<crate::method::MethodFit, crate::error::TrainError> {
         let first_free = opts.pins.first() != Some(&crate::pin::Pin::Linear);
-        let cubic = if opts.linear && opts.cubic && opts.centers.is_none() && first_free {
-            let time = set.data.time(&opts.time)?;
+        let cubic = if self.linear() && self.cubic() && opts.centers.is_none() && first_free {
+            let time = set.data.time(opts.time)?;
             crate::cubic::cubic_basis(
                 &set.spec,
                 &set.data,
@@ -426,12 +443,12 @@ impl crate::method::FitMethod for Bayes {
             None
         };
         let bo = BayesOptions {
-            linear: opts.linear,
+            linear: self.linear(),
             centers: opts.centers,
             seed: opts.seed,
             names: set.spec.features.clone(),
-            additive: opts.additive,
-            pins: opts.pins.clone(),
+            additive: self.additive(),
+            pins: opts.pins.to_vec(),
         };
         let offered = cubic.as_ref().map(|c| c.rows.as_slice());
         let f = fit_binned(&set.x, &set.y, offered, Some(&set.sub_x), &bo).ok_or(

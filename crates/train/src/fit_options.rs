@@ -6,9 +6,10 @@
 
 use crate::error::TrainError;
 use crate::features::FeatureSpec;
-use crate::method::Method;
-use crate::mse::CenterSelection;
+use crate::layer::Layer;
+use crate::method::{FitMethod, Shared};
 use crate::options;
+use crate::registry::{Method, MethodSettings};
 use crate::spec::{ChannelOptions, MethodOptions, RunOptions, Spec};
 use tcomp_core::SensorKind;
 
@@ -40,30 +41,23 @@ pub struct FitOptions {
     pub spec: FeatureSpec,
     /// Method.
     pub method: Method,
-    /// Averaging bin (s), 0 for none; `None`: [`DEFAULT_AVERAGE_S`], shortened on short runs to
-    /// leave [`MIN_DEFAULT_BINS`] bins.
+    /// Averaging bin (s), 0 for none; `None`: [`crate::rows::DEFAULT_AVERAGE_S`], shortened on
+    /// short runs to leave [`crate::rows::MIN_DEFAULT_BINS`] bins.
     pub average_s: Option<f64>,
+    /// Each method's own options (unset: the method's default), e.g. `settings.bayes.cubic`;
+    /// [`Method::fitter`] hands the selected method its own.
+    pub settings: MethodSettings,
     /// Fixed number of centers.
     pub centers: Option<usize>,
-    /// Linear term (bayes).
-    pub linear: bool,
-    /// Offer `bayes` the cubic in the first feature as a basis (chosen only by evidence).
-    pub cubic: bool,
-    /// Offer `bayes` the additive structure beside the joint model (chosen only by evidence).
-    pub additive: bool,
     /// Per feature, how it may enter the Gaussians (from the `linear:` / `additive:` marks of the
     /// features, see [`crate::pin`]); empty: every feature free.
     pub pins: Vec<crate::pin::Pin>,
-    /// How `mse` places its centers.
-    pub select: CenterSelection,
     /// Gap threshold (s); default 10× the median step.
     pub gap_s: Option<f64>,
     /// Time of power-on on the time column (s); default the first row read.
     pub power_on_s: Option<f64>,
     /// k-means seed.
     pub seed: u64,
-    /// Gradient iterations.
-    pub iterations: usize,
     /// Sensor kind.
     pub sensor: SensorKind,
     /// Axis label.
@@ -96,16 +90,12 @@ impl FitOptions {
             },
             method: Method::Bayes,
             average_s: None,
+            settings: MethodSettings::default(),
             centers: None,
-            linear: true,
-            cubic: true,
-            additive: true,
             pins: Vec::new(),
-            select: CenterSelection::Kmeans,
             gap_s: None,
             power_on_s: None,
             seed: 1,
-            iterations: 2000,
             sensor: SensorKind::Other,
             axis: String::new(),
             unit: String::new(),
@@ -114,6 +104,23 @@ impl FitOptions {
             memory_budget: crate::budget::DEFAULT_BUDGET_BYTES,
             repeated_time: crate::dataset::RepeatedTime::default(),
             missing: crate::dataset::Missing::default(),
+        }
+    }
+
+    /// The selected method, with its own options.
+    pub fn fitter(&self) -> &dyn FitMethod {
+        self.method.fitter(&self.settings)
+    }
+
+    /// The options every method may read besides its own.
+    pub fn shared(&self) -> Shared<'_> {
+        Shared {
+            time: &self.time,
+            spec: &self.spec,
+            centers: self.centers,
+            seed: self.seed,
+            pins: &self.pins,
+            power_on_s: self.power_on_s,
         }
     }
 
@@ -196,31 +203,16 @@ impl FitOptions {
             self.average_s = Some(options::AVERAGE.check(a)?);
         }
         if let Some(c) = m.centers {
-            self.method
-                .fitter()
+            self.fitter()
                 .centers_bound()
                 .check_count(c, &format!(" with --method {}", self.method))?;
         }
         self.centers = m.centers;
-        if let Some(l) = m.linear {
-            self.linear = l;
-        }
-        if let Some(c) = m.cubic {
-            self.cubic = c;
-        }
-        if let Some(a) = m.additive {
-            self.additive = a;
-        }
-        if let Some(s) = &m.select {
-            self.select = s.parse()?;
-        }
         if let Some(s) = m.seed {
             self.seed = s;
         }
-        if let Some(i) = m.iterations {
-            self.iterations = options::ITERATIONS.check_count(i, "")?;
-        }
-        Ok(())
+        self.settings.overlay(m.settings.clone());
+        self.settings.check()
     }
 
     /// The columns and the blob's description of the channel (the target is read first).

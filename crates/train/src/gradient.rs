@@ -11,6 +11,7 @@
 use crate::error::TrainError;
 use crate::progress::{Progress, Silent, Unit};
 use crate::rbf64::Rbf64;
+use serde::Deserialize;
 
 /// Fits by gradient descent from the `mse` starting point; `iterations` full-batch steps at most.
 pub fn fit(
@@ -127,11 +128,34 @@ fn eval_z(rbf: &Rbf64, z: &[f64]) -> f64 {
     acc
 }
 
-/// The `gradient` method.
-pub struct Gradient;
+/// Gradient-descent iterations when `--iterations` is not given.
+pub const DEFAULT_ITERATIONS: usize = 2000;
+
+crate::layer! {
+    /// The `gradient` method, with its own options: keys of the fit spec and (with the `cli`
+    /// feature) flags, unset for the default.
+    #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+    #[cfg_attr(feature = "cli", derive(clap::Args))]
+    #[serde(rename_all = "kebab-case")]
+    pub struct Gradient {
+        /// Gradient-descent iterations.
+        #[cfg_attr(
+            feature = "cli",
+            arg(long, allow_negative_numbers = true, value_parser = crate::options::ITERATIONS.count_parser())
+        )]
+        pub iterations: Option<usize>,
+    }
+}
+
+impl Gradient {
+    /// The iterations [default: [`DEFAULT_ITERATIONS`]].
+    pub fn iterations(&self) -> usize {
+        self.iterations.unwrap_or(DEFAULT_ITERATIONS)
+    }
+}
 
 /// The centers asked for, or the default.
-fn centers(opts: &crate::train::FitOptions) -> usize {
+fn centers(opts: &crate::method::Shared<'_>) -> usize {
     opts.centers.unwrap_or(crate::method::DEFAULT_CENTERS)
 }
 
@@ -148,25 +172,30 @@ impl crate::method::FitMethod for Gradient {
         &crate::options::CENTERS
     }
 
-    fn check(&self, opts: &crate::train::FitOptions) -> Result<(), TrainError> {
-        crate::options::CENTERS.check_count(centers(opts), " with --method gradient")?;
-        crate::options::ITERATIONS.check_count(opts.iterations, "")?;
+    fn check_settings(&self) -> Result<(), TrainError> {
+        crate::options::ITERATIONS.check_count(self.iterations(), "")?;
         Ok(())
     }
 
-    fn min_samples(&self, opts: &crate::train::FitOptions) -> usize {
+    fn check(&self, opts: &crate::method::Shared<'_>) -> Result<(), TrainError> {
+        crate::options::CENTERS.check_count(centers(opts), " with --method gradient")?;
+        self.check_settings()
+    }
+
+    fn min_samples(&self, opts: &crate::method::Shared<'_>) -> usize {
         2 * centers(opts) + 2
     }
 
-    /// The `mse` starting point, and the normalised rows of the descent.
+    /// The `mse` starting point (k-means centers), and the normalised rows of the descent.
     fn memory(&self, s: &crate::budget::Shape) -> f64 {
-        crate::mse::memory(s) + crate::budget::rows_of(s.samples, s.features)
+        crate::mse::memory(s, crate::mse::CenterSelection::Kmeans)
+            + crate::budget::rows_of(s.samples, s.features)
     }
 
     fn fit(
         &self,
         set: &mut crate::method::TrainingSet,
-        opts: &crate::train::FitOptions,
+        opts: &crate::method::Shared<'_>,
         progress: &dyn Progress,
     ) -> Result<crate::method::MethodFit, TrainError> {
         let rbf = fit_with_progress(
@@ -174,7 +203,7 @@ impl crate::method::FitMethod for Gradient {
             &set.y,
             centers(opts),
             opts.seed,
-            opts.iterations,
+            self.iterations(),
             progress,
         )?;
         progress.start("measuring the fit", 0, Unit::Iterations);

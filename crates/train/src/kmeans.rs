@@ -112,17 +112,3 @@ pub fn kmeans(points: &[Vec<f64>], k: usize, seed: u64) -> Vec<Vec<f64>> {
     }
     centers.chunks_exact(dim).map(<[f64]>::to_vec).collect()
 }
-
-/// Index of the center nearest to `p`.
-pub fn nearest(centers: &[Vec<f64>], p: &[f64]) -> usize {
-    let mut best = 0;
-    let mut bd = f64::INFINITY;
-    for (j, c) in centers.iter().enumerate() {
-        let d = dist2(c, p);
-        if d < bd {
-            bd = d;
-            best = j;
-        }
-    }
-    best
-}

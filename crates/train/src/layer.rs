@@ -14,12 +14,17 @@
 /// A field of a layer: how a value given later (a flag) lies over one given earlier (the file).
 pub trait Field {
     /// `other` over `self`.
-    fn overlay(&mut self, other: Self);
+    fn overlay_field(&mut self, other: Self);
+    /// The spec keys of a field named `name`: its own name in kebab-case, or, for a layer
+    /// flattened into another (a method's own options), the keys of its fields.
+    fn field_keys(name: &str, out: &mut Vec<String>) {
+        out.push(name.replace('_', "-"));
+    }
 }
 
 impl<T> Field for Option<T> {
     /// A value given later wins.
-    fn overlay(&mut self, other: Self) {
+    fn overlay_field(&mut self, other: Self) {
         if other.is_some() {
             *self = other;
         }
@@ -28,7 +33,7 @@ impl<T> Field for Option<T> {
 
 impl<T> Field for Vec<T> {
     /// Lists add up (features and signals of the file, then those of the flags).
-    fn overlay(&mut self, other: Self) {
+    fn overlay_field(&mut self, other: Self) {
         self.extend(other);
     }
 }
@@ -42,7 +47,10 @@ pub trait Layer {
 }
 
 /// Defines a layer struct (attributes and doc comments pass through to the struct and its
-/// fields) and its [`Layer`] implementation from the same field list.
+/// fields) and its [`Layer`] implementation from the same field list. The struct is also a
+/// [`Field`] whose keys are its fields' keys, so a layer can be flattened into another (with
+/// `#[serde(flatten)]` and clap's `#[command(flatten)]`): each method's own options are laid into
+/// the method options this way ([`crate::registry`]).
 #[macro_export]
 macro_rules! layer {
     (
@@ -57,12 +65,24 @@ macro_rules! layer {
         }
 
         impl $crate::layer::Layer for $name {
+            #[allow(unused_variables)]
             fn overlay(&mut self, other: Self) {
-                $( $crate::layer::Field::overlay(&mut self.$field, other.$field); )*
+                $( $crate::layer::Field::overlay_field(&mut self.$field, other.$field); )*
             }
 
+            #[allow(unused_variables)]
             fn keys(out: &mut Vec<String>) {
-                $( out.push(stringify!($field).replace('_', "-")); )*
+                $( <$ty as $crate::layer::Field>::field_keys(stringify!($field), out); )*
+            }
+        }
+
+        impl $crate::layer::Field for $name {
+            fn overlay_field(&mut self, other: Self) {
+                $crate::layer::Layer::overlay(self, other);
+            }
+
+            fn field_keys(_name: &str, out: &mut Vec<String>) {
+                <$name as $crate::layer::Layer>::keys(out);
             }
         }
     };

@@ -3,8 +3,8 @@
 //! The pipeline: [`dataset`] loads a measurement CSV with precise errors; [`features`] runs the
 //! core's feature program over it (the code the firmware runs) and [`binning`] averages the rows
 //! into time bins; a method fits an RBF in f64 —
-//! [`bayes`] (default, MacKay evidence), [`mse`] (centers by k-means or [`ols`]), [`gradient`] or
-//! the [`poly3`] baseline, each an implementation of [`method::FitMethod`]; [`blob_io`]
+//! [`bayes`] (default, MacKay evidence), [`mse`] (centers by k-means or orthogonal least squares), [`gradient`] or
+//! the [`poly3`] baseline, each an implementation of [`method::FitMethod`] listed in [`registry`]; [`blob_io`]
 //! stores it as the core's blob; [`metrics`] measures it by running the decoded blob through the
 //! core's f32 `Channel`. [`train::fit`] ties it together for `tcomp fit`; [`spec`] reads the TOML spec.
 //!
@@ -33,26 +33,27 @@ pub mod bayes;
 pub mod binning;
 pub mod blob_io;
 pub mod budget;
-pub mod cubic;
+mod cubic;
 pub mod dataset;
 pub mod error;
 pub mod evidence;
 pub mod features;
-pub mod fit_options;
+mod fit_options;
 pub mod gradient;
-pub mod kmeans;
+mod kmeans;
 pub mod layer;
 pub mod method;
 pub mod metrics;
 pub mod mse;
 pub mod num;
-pub mod ols;
+mod ols;
 pub mod options;
 pub mod pin;
 pub mod poly3;
 pub mod progress;
 pub mod rbf64;
-pub mod rows;
+pub mod registry;
+mod rows;
 pub mod spec;
 pub mod stream;
 pub mod train;
@@ -63,4 +64,6 @@ pub use error::TrainError;
 pub use metrics::{EvalReport, Roles};
 pub use spec::{ChannelOptions, FeatureOptions, MethodOptions, RunOptions, Spec};
 pub use stream::{StreamOptions, eval_stream, eval_stream_reader};
-pub use train::{FitOptions, FitSummary, Fitted, Method, evaluate, fit, fit_with_progress};
+pub use train::{
+    FitOptions, FitSummary, Fitted, Method, MethodSettings, evaluate, fit, fit_with_progress,
+};

@@ -1,28 +1,49 @@
-//! The fit-method trait and its registry: the one place a new method goes.
+//! The fit-method trait and what every method needs: the one contract between the trainer and a
+//! method, importing no method.
 //!
 //! Why a trait: a method used to be a `match` in many places (the name, the fewest samples, the
 //! option checks, poly3's program rewrite, the fit itself, the summary's fields, the help text).
 //! Now a method is one `impl FitMethod` in its own module ([`crate::bayes`], [`crate::mse`],
-//! [`crate::gradient`], [`crate::poly3`]) and one line in [`Method::fitter`]; [`crate::train`] only
-//! orchestrates: select the rows, let the method rewrite the program, compute and average the
-//! features, let the method fit, store and measure the blob.
+//! [`crate::gradient`], [`crate::poly3`]) on the struct of its own options, and one line of the
+//! registry ([`crate::registry`], which knows every method; this module knows none);
+//! [`crate::train`] only orchestrates: select the rows, let the method rewrite the program, compute
+//! and average the features, let the method fit, store and measure the blob.
+//!
+//! A method reads the options it shares with the others ([`Shared`]: the time column, the program,
+//! the number of centers, the seed, the pins) and its own, which are the fields of its struct.
+//! What the summary shows of a fit ([`MethodDetails`]) is here too, with the few types it names.
 
-use crate::bayes::{Basis, Evidence};
 use crate::dataset::Dataset;
 use crate::error::TrainError;
+use crate::evidence::Evidence;
 use crate::features::FeatureSpec;
-use crate::mse::CenterSelection;
 use crate::options::{self, Bound};
+use crate::pin::Pin;
 use crate::progress::Progress;
 use crate::rbf64::Rbf64;
-use crate::train::FitOptions;
 use serde::Serialize;
-use std::fmt;
 use std::str::FromStr;
 use tcomp_core::FeatureRange;
 
 /// Default number of centers of the methods with a fixed number (`mse`, `gradient`).
 pub const DEFAULT_CENTERS: usize = 16;
+
+/// The options every method may read besides its own (a view of [`crate::FitOptions`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Shared<'a> {
+    /// Time column.
+    pub time: &'a str,
+    /// Signals and features, as given.
+    pub spec: &'a FeatureSpec,
+    /// Fixed number of centers.
+    pub centers: Option<usize>,
+    /// k-means seed.
+    pub seed: u64,
+    /// Per feature, how it may enter the Gaussians ([`crate::pin`]); empty: every feature free.
+    pub pins: &'a [Pin],
+    /// Time of power-on on the time column (s); default the first row read.
+    pub power_on_s: Option<f64>,
+}
 
 /// What a method is fitted on: the selected rows, the stored program, and the (binned) training
 /// rows. A method may change the program and its ranges (`bayes` choosing the cubic basis) and add
@@ -70,7 +91,7 @@ pub struct MethodDetails {
     /// Log evidence of the best model of the other basis (bayes, when the cubic was offered).
     pub other_basis_log_evidence: Option<f64>,
     /// The structure the evidence chose and every structure compared (bayes).
-    pub structure: Option<crate::bayes::StructureReport>,
+    pub structure: Option<StructureReport>,
 }
 
 /// A method's result.
@@ -95,20 +116,25 @@ pub trait FitMethod: Sync {
     fn centers_bound(&self) -> &'static Bound {
         &options::CENTERS_BAYES
     }
-    /// Checks the options only this method uses (beyond the table's bounds).
-    fn check(&self, _opts: &FitOptions) -> Result<(), TrainError> {
+    /// Checks the method's own options alone (before any data are read; every method's, as the
+    /// spec may set options of a method it does not select).
+    fn check_settings(&self) -> Result<(), TrainError> {
         Ok(())
     }
+    /// Checks the options as this method will use them (beyond the table's bounds).
+    fn check(&self, _opts: &Shared<'_>) -> Result<(), TrainError> {
+        self.check_settings()
+    }
     /// The fewest training samples (after averaging) the method can be fitted on.
-    fn min_samples(&self, opts: &FitOptions) -> usize;
+    fn min_samples(&self, opts: &Shared<'_>) -> usize;
     /// The number of features the method fits (for the memory estimate).
-    fn features_fitted(&self, opts: &FitOptions) -> usize {
+    fn features_fitted(&self, opts: &Shared<'_>) -> usize {
         opts.spec.features.len()
     }
     /// The program actually stored (poly3 rewrites it around one clamped temperature).
     fn program(
         &self,
-        opts: &FitOptions,
+        opts: &Shared<'_>,
         _data: &Dataset,
         _starts: &[usize],
         _warnings: &mut Vec<String>,
@@ -126,106 +152,55 @@ pub trait FitMethod: Sync {
     fn fit(
         &self,
         set: &mut TrainingSet,
-        opts: &FitOptions,
+        opts: &Shared<'_>,
         progress: &dyn Progress,
     ) -> Result<MethodFit, TrainError>;
 }
 
-/// A training method: the registry's key (a plain `Copy` value for options and the memory
-/// estimate); [`Method::fitter`] is the implementation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+/// Which basis a Bayesian fit uses besides the bias and the linear term.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Method {
-    /// Bayesian-regularised RBF with evidence-chosen structure.
-    Bayes,
-    /// k-means + width heuristic + least squares.
-    Mse,
-    /// Gradient descent on weights, centers and widths.
-    Gradient,
-    /// Cubic in one clamped temperature.
-    Poly3,
+pub enum Basis {
+    /// Gaussian radial basis functions (possibly none: the linear term alone).
+    #[default]
+    Gaussians,
+    /// `T²` and `T³` of the first feature clamped to its trained range (the PX4/ArduPilot cubic),
+    /// under the same prior as the linear term, and no Gaussians.
+    Cubic,
 }
 
-impl Method {
-    /// Every method, the default first.
-    pub const ALL: [Method; 4] = [Method::Bayes, Method::Mse, Method::Gradient, Method::Poly3];
-
-    /// The implementation: the registry's one `match`.
-    pub fn fitter(self) -> &'static dyn FitMethod {
-        match self {
-            Method::Bayes => &crate::bayes::Bayes,
-            Method::Mse => &crate::mse::Mse,
-            Method::Gradient => &crate::gradient::Gradient,
-            Method::Poly3 => &crate::poly3::Poly3,
-        }
-    }
-
-    /// The method's name, as `--method` takes it.
-    pub fn name(self) -> &'static str {
-        self.fitter().name()
-    }
-
-    /// The known names, comma-separated.
-    pub fn names() -> String {
-        Self::ALL.map(Method::name).join(", ")
-    }
-
-    /// `--method`'s help, from the registry: each name with its line, the default first.
-    pub fn help() -> String {
-        let list: Vec<String> = Self::ALL
-            .iter()
-            .enumerate()
-            .map(|(i, m)| {
-                let default = if i == 0 { " (default)" } else { "" };
-                format!("  {}{default}: {}", m.name(), m.fitter().about())
-            })
-            .collect();
-        format!("Method:\n{}", list.join("\n"))
-    }
+/// How the structure was chosen, for the report: each structure compared with its log evidence.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct StructureReport {
+    /// The chosen structure, as a line ("joint: 8 Gaussians over (T, rate(T)), σ 0.70",
+    /// "additive: 3 Gaussians over (T), σ 0.2–1.6 + linear in (supply_v)", "cubic …").
+    pub chosen: String,
+    /// Each structure compared and its log evidence (target units), best first.
+    pub compared: Vec<(String, f64)>,
 }
 
-impl Default for Method {
-    fn default() -> Self {
-        Method::ALL[0]
-    }
+/// How the traditional RBF places its centers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CenterSelection {
+    /// k-means++ then Lloyd iterations: where the data are.
+    #[default]
+    Kmeans,
+    /// Orthogonal least squares forward selection among the training rows: where the error is.
+    Ols,
 }
 
-impl fmt::Display for Method {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Method {
+impl FromStr for CenterSelection {
     type Err = TrainError;
     fn from_str(s: &str) -> Result<Self, TrainError> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| TrainError::Unknown {
-                what: "method",
+        match s {
+            "kmeans" => Ok(Self::Kmeans),
+            "ols" => Ok(Self::Ols),
+            _ => Err(TrainError::Unknown {
+                what: "center selection",
                 name: s.into(),
-                known: Self::names(),
-            })
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn every_method_parses_back_from_its_name_and_is_in_the_help() {
-        let help = Method::help();
-        for m in Method::ALL {
-            assert_eq!(m.name().parse::<Method>().ok(), Some(m));
-            assert!(help.contains(m.name()), "{help}");
+                known: "kmeans, ols".into(),
+            }),
         }
-        assert!(help.starts_with("Method:\n  bayes (default): "), "{help}");
-        let e = "magic".parse::<Method>().err().map(|e| e.to_string());
-        assert_eq!(
-            e.as_deref(),
-            Some("unknown method `magic` (known: bayes, mse, gradient, poly3)")
-        );
     }
 }

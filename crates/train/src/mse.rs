@@ -9,9 +9,9 @@
 
 use crate::error::TrainError;
 use crate::kmeans::{dist2, kmeans};
+pub use crate::method::CenterSelection;
 use crate::rbf64::{Rbf64, design, least_squares, mean_std, normalise_rows, split_weights};
-use serde::Serialize;
-use std::str::FromStr;
+use serde::Deserialize;
 
 /// Width heuristic `σ = d_max/√(2M)`; 1 with fewer than two centers.
 pub fn width_heuristic(centers: &[Vec<f64>]) -> f64 {
@@ -35,32 +35,6 @@ fn heuristic_width(dmax: f64, m: usize) -> f64 {
         1.0
     } else {
         dmax / (2.0 * m as f64).sqrt()
-    }
-}
-
-/// How the traditional RBF places its centers.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CenterSelection {
-    /// k-means++ then Lloyd iterations: where the data are.
-    #[default]
-    Kmeans,
-    /// Orthogonal least squares forward selection among the training rows: where the error is.
-    Ols,
-}
-
-impl FromStr for CenterSelection {
-    type Err = TrainError;
-    fn from_str(s: &str) -> Result<Self, TrainError> {
-        match s {
-            "kmeans" => Ok(Self::Kmeans),
-            "ols" => Ok(Self::Ols),
-            _ => Err(TrainError::Unknown {
-                what: "center selection",
-                name: s.into(),
-                known: "kmeans, ols".into(),
-            }),
-        }
     }
 }
 
@@ -115,10 +89,10 @@ pub fn fit_selecting(
 
 /// The memory of a fit of `mse` (and of `gradient`'s starting point): the standardised rows, the
 /// candidates' Gaussians over every row with `--select ols`, and the least-squares solve.
-pub(crate) fn memory(s: &crate::budget::Shape) -> f64 {
+pub(crate) fn memory(s: &crate::budget::Shape, select: CenterSelection) -> f64 {
     let (m, mf) = (s.samples, s.samples as f64);
     let centers = s.centers.unwrap_or(crate::method::DEFAULT_CENTERS);
-    let select = match s.select {
+    let select = match select {
         CenterSelection::Kmeans => 0.0,
         // Every candidate's Gaussian over every row.
         CenterSelection::Ols => 8.0 * mf * m.min(crate::ols::MAX_CANDIDATES) as f64 + 8.0 * mf,
@@ -126,11 +100,31 @@ pub(crate) fn memory(s: &crate::budget::Shape) -> f64 {
     crate::budget::rows_of(m, s.features) + select + crate::budget::lsq(m, centers)
 }
 
-/// The `mse` method.
-pub struct Mse;
+crate::layer! {
+    /// The `mse` method, with its own options: keys of the fit spec and (with the `cli` feature)
+    /// flags, unset for the default.
+    #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+    #[cfg_attr(feature = "cli", derive(clap::Args))]
+    #[serde(rename_all = "kebab-case")]
+    pub struct Mse {
+        /// Center selection of mse: kmeans (default) or ols (orthogonal least squares forward
+        /// selection).
+        #[cfg_attr(feature = "cli", arg(long))]
+        pub select: Option<String>,
+    }
+}
+
+impl Mse {
+    /// How the centers are placed [default: k-means].
+    pub fn select(&self) -> Result<CenterSelection, TrainError> {
+        self.select
+            .as_deref()
+            .map_or(Ok(CenterSelection::Kmeans), str::parse)
+    }
+}
 
 /// The centers asked for, or the default.
-fn centers(opts: &crate::train::FitOptions) -> usize {
+fn centers(opts: &crate::method::Shared<'_>) -> usize {
     opts.centers.unwrap_or(crate::method::DEFAULT_CENTERS)
 }
 
@@ -148,28 +142,34 @@ impl crate::method::FitMethod for Mse {
         &crate::options::CENTERS
     }
 
-    fn check(&self, opts: &crate::train::FitOptions) -> Result<(), TrainError> {
+    fn check_settings(&self) -> Result<(), TrainError> {
+        self.select().map(|_| ())
+    }
+
+    fn check(&self, opts: &crate::method::Shared<'_>) -> Result<(), TrainError> {
+        self.check_settings()?;
         crate::options::CENTERS
             .check_count(centers(opts), " with --method mse")
             .map(|_| ())
     }
 
-    fn min_samples(&self, opts: &crate::train::FitOptions) -> usize {
+    fn min_samples(&self, opts: &crate::method::Shared<'_>) -> usize {
         2 * centers(opts) + 2
     }
 
     fn memory(&self, s: &crate::budget::Shape) -> f64 {
-        memory(s)
+        memory(s, self.select().unwrap_or_default())
     }
 
     fn fit(
         &self,
         set: &mut crate::method::TrainingSet,
-        opts: &crate::train::FitOptions,
+        opts: &crate::method::Shared<'_>,
         _progress: &dyn crate::progress::Progress,
     ) -> Result<crate::method::MethodFit, TrainError> {
         let m = centers(opts);
-        let rbf = fit_selecting(&set.x, &set.y, m, opts.seed, opts.select)?;
+        let select = self.select()?;
+        let rbf = fit_selecting(&set.x, &set.y, m, opts.seed, select)?;
         if rbf.centers.len() < m {
             set.warnings.push(format!(
                 "{} of the {m} centers asked for: every further candidate was a \
@@ -181,7 +181,7 @@ impl crate::method::FitMethod for Mse {
             rbf,
             width: None,
             details: crate::method::MethodDetails {
-                select: Some(opts.select),
+                select: Some(select),
                 ..Default::default()
             },
         })

@@ -12,10 +12,10 @@
 use crate::dataset::Dataset;
 use crate::error::TrainError;
 use crate::features::{self, FeatureSpec};
-use crate::method::{FitMethod, MethodDetails, MethodFit, TrainingSet};
+use crate::method::{FitMethod, MethodDetails, MethodFit, Shared, TrainingSet};
 use crate::progress::Progress;
 use crate::rbf64::{Rbf64, design, least_squares, mean_std, normalise_rows, split_weights};
-use crate::train::FitOptions;
+use serde::Deserialize;
 use tcomp_core::expr::{self, Expr};
 
 /// Name of the clamped-temperature signal poly3 defines.
@@ -55,8 +55,12 @@ pub fn fit(x: &[Vec<f64>], y: &[f64]) -> Result<Rbf64, TrainError> {
     })
 }
 
-/// The `poly3` method.
-pub struct Poly3;
+crate::layer! {
+    /// The `poly3` method (it has no options of its own).
+    #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+    #[cfg_attr(feature = "cli", derive(clap::Args))]
+    pub struct Poly3 {}
+}
 
 impl FitMethod for Poly3 {
     fn name(&self) -> &'static str {
@@ -67,11 +71,11 @@ impl FitMethod for Poly3 {
         "the PX4/ArduPilot cubic in the first feature, clamped to its trained range"
     }
 
-    fn min_samples(&self, _opts: &FitOptions) -> usize {
+    fn min_samples(&self, _opts: &Shared<'_>) -> usize {
         8
     }
 
-    fn features_fitted(&self, _opts: &FitOptions) -> usize {
+    fn features_fitted(&self, _opts: &Shared<'_>) -> usize {
         1
     }
 
@@ -79,7 +83,7 @@ impl FitMethod for Poly3 {
     /// rows, then [`program_lines`].
     fn program(
         &self,
-        opts: &FitOptions,
+        opts: &Shared<'_>,
         data: &Dataset,
         starts: &[usize],
         warnings: &mut Vec<String>,
@@ -97,7 +101,7 @@ impl FitMethod for Poly3 {
             signals: opts.spec.signals.clone(),
             features: vec![expr.clone()],
         };
-        let time = data.time(&opts.time)?;
+        let time = data.time(opts.time)?;
         let time_on = features::time_on_s(time, opts.power_on_s)?;
         let t = features::compute_from(&probe.program()?, data, time, starts, time_on)?;
         let (lo, hi) = t
@@ -126,7 +130,7 @@ impl FitMethod for Poly3 {
     fn fit(
         &self,
         set: &mut TrainingSet,
-        _opts: &FitOptions,
+        _opts: &Shared<'_>,
         _progress: &dyn Progress,
     ) -> Result<MethodFit, TrainError> {
         Ok(MethodFit {

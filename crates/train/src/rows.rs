@@ -10,11 +10,20 @@ use crate::binning::{adaptive_bin, bin_mean, bins};
 use crate::dataset::{DataError, Dataset, segments};
 use crate::error::TrainError;
 use crate::features::{self, FeatureSpec};
+use crate::fit_options::FitOptions;
 use crate::method::{FitMethod, TrainingSet};
 use crate::metrics::Roles;
 use crate::options;
-use crate::train::{DEFAULT_AVERAGE_S, FitOptions, MIN_DEFAULT_BINS};
-use tcomp_core::FeatureRange;
+use tcomp_core::{FeatureRange, Program};
+
+/// Default averaging bin before fitting (s), shortened to leave at least [`MIN_DEFAULT_BINS`] bins.
+/// Bias instability makes 1 Hz samples strongly correlated, and the evidence computed as if they
+/// were independent is overconfident: on the simulated QMA run, 30 s bins let the evidence pick 32
+/// narrow centers that learn a spurious temperature × rate interaction (held-out residual 17× the
+/// noise floor), while 120 s bins give 1.13× (measured). A 6-hour run still gives 180 bins.
+pub const DEFAULT_AVERAGE_S: f64 = 120.0;
+/// The default averaging is shortened on short runs so that at least this many bins remain.
+pub const MIN_DEFAULT_BINS: f64 = 60.0;
 
 fn check_features(
     spec: &FeatureSpec,
@@ -165,21 +174,20 @@ fn check_options(opts: &FitOptions, method: &dyn FitMethod) -> Result<(), TrainE
     if let Some(g) = opts.gap_s {
         options::GAP.check(g)?;
     }
-    method.check(opts)
+    method.check(&opts.shared())
 }
 
 /// The feature columns of `spec` over the selected rows (one column per feature: a row per sample
 /// would be 22,000 small allocations on a 6-hour run), and each feature's trained range.
 fn feature_columns(
-    spec: &FeatureSpec,
+    program: &Program<'_, { features::N }, { features::F }>,
     data: &Dataset,
     time: &[f64],
     starts: &[usize],
     time_on_s: f64,
 ) -> Result<(Vec<Vec<f64>>, Vec<FeatureRange>), TrainError> {
-    let program = spec.program()?;
     let nf = program.n_features();
-    let feats = features::compute_from(&program, data, time, starts, time_on_s)?;
+    let feats = features::compute_from(program, data, time, starts, time_on_s)?;
     let columns: Vec<Vec<f64>> = (0..nf)
         .map(|k| {
             feats
@@ -210,7 +218,7 @@ pub(crate) fn check_samples(
     have: usize,
     after: String,
 ) -> Result<(), TrainError> {
-    let need = method.min_samples(opts);
+    let need = method.min_samples(&opts.shared());
     if have >= need {
         return Ok(());
     }
@@ -229,7 +237,7 @@ pub(crate) fn prepare(
     data: &Dataset,
     opts: &FitOptions,
 ) -> Result<(TrainingSet, Prepared), TrainError> {
-    let method = opts.method.fitter();
+    let method = opts.fitter();
     let Selection {
         data,
         error,
@@ -243,9 +251,13 @@ pub(crate) fn prepare(
     let average_s = averaging(opts, &data, time)?;
     let b = bins(time, average_s);
     check_memory(opts, time, b.len(), &data)?;
-    let spec = method.program(opts, &data, &starts, &mut warnings)?;
-    gap_warnings(&spec, &data, time, &starts, &mut warnings)?;
-    let (columns, ranges) = feature_columns(&spec, &data, time, &starts, time_on_s)?;
+    let spec = method.program(&opts.shared(), &data, &starts, &mut warnings)?;
+    // Compiled once, for the gaps' warnings and the feature columns.
+    let (columns, ranges) = {
+        let program = spec.program()?;
+        gap_warnings(&program, &data, time, &starts, &mut warnings)?;
+        feature_columns(&program, &data, time, &starts, time_on_s)?
+    };
     // Too few rows is said as such (after any bad cell they hold), before a feature over them
     // looks constant.
     check_samples(method, opts, &data, time.len(), " (rows)".to_string())?;
@@ -311,7 +323,7 @@ fn sub_rows(columns: &[Vec<f64>], bins: &[(usize, usize)]) -> Vec<Vec<Vec<f64>>>
 /// The gaps of the record: one line for those the feature state is carried across, one per gap
 /// that restarts it (longer than 5× the program's longest time constant), naming the row.
 fn gap_warnings(
-    spec: &FeatureSpec,
+    program: &Program<'_, { features::N }, { features::F }>,
     data: &Dataset,
     time: &[f64],
     starts: &[usize],
@@ -321,8 +333,7 @@ fn gap_warnings(
     if gaps == 0 {
         return Ok(());
     }
-    let program = spec.program()?;
-    let restarting = features::restarting_gaps(&program, time, starts);
+    let restarting = features::restarting_gaps(program, time, starts);
     let carried = gaps - restarting.len();
     if carried > 0 {
         warnings.push(format!(
@@ -349,17 +360,18 @@ pub(crate) struct Prepared {
     pub(crate) average_s: f64,
 }
 
-/// The shape of a fit of `samples` training samples over `rows` rows with `opts`.
-fn shape(opts: &FitOptions, rows: usize, samples: usize) -> crate::budget::Shape {
-    crate::budget::Shape {
+/// The estimated peak memory of a fit of `samples` training samples over `rows` rows with `opts`
+/// (see [`crate::budget::estimate`]), bytes.
+fn estimate(opts: &FitOptions, rows: usize, samples: usize) -> u64 {
+    let method = opts.fitter();
+    let shape = crate::budget::Shape {
         rows,
         samples,
-        features: opts.method.fitter().features_fitted(opts),
-        method: opts.method,
+        features: method.features_fitted(&opts.shared()),
         centers: opts.centers,
-        select: opts.select,
         threads: rayon::current_num_threads(),
-    }
+    };
+    crate::budget::estimate(&shape, method.memory(&shape))
 }
 
 /// Refuses a fit whose estimated memory is over `opts.memory_budget`, suggesting the shortest
@@ -370,8 +382,8 @@ fn check_memory(
     samples: usize,
     data: &Dataset,
 ) -> Result<(), TrainError> {
-    use crate::budget::{estimate, human};
-    let need = estimate(&shape(opts, time.len(), samples));
+    use crate::budget::human;
+    let need = estimate(opts, time.len(), samples);
     if need <= opts.memory_budget {
         return Ok(());
     }
@@ -380,7 +392,7 @@ fn check_memory(
     let suggestion = [1.0, 2.0, 5.0, 10.0, 30.0, 60.0, 120.0, 300.0, 600.0]
         .into_iter()
         .filter(|&a| a >= step && a > opts.average_s.unwrap_or(0.0))
-        .find(|&a| estimate(&shape(opts, time.len(), bins(time, a).len())) <= opts.memory_budget);
+        .find(|&a| estimate(opts, time.len(), bins(time, a).len()) <= opts.memory_budget);
     let averaged = match opts.average_s {
         Some(a) if a > 0.0 => format!("averaged into {a} s bins"),
         Some(_) => "unaveraged".to_string(),
@@ -400,7 +412,7 @@ fn check_memory(
                     "; average into bins (e.g. --average {a}, which needs {}; without --average \
                      the default is {DEFAULT_AVERAGE_S} s), or pick a shorter window with \
                      --from/--until",
-                    human(estimate(&shape(opts, time.len(), bins(time, a).len())))
+                    human(estimate(opts, time.len(), bins(time, a).len()))
                 ),
                 None => "; pick a shorter window with --from/--until".to_string(),
             },

@@ -28,8 +28,9 @@ use crate::error::TrainError;
 use crate::layer::Layer;
 #[cfg(feature = "cli")]
 use crate::options::{
-    AVERAGE, CENTERS_BAYES, FROM, GAP, ITERATIONS, POWER_ON, REFERENCE_VALUE, UNTIL, parse_seed,
+    AVERAGE, CENTERS_BAYES, FROM, GAP, POWER_ON, REFERENCE_VALUE, UNTIL, parse_seed,
 };
+use crate::registry::MethodSettings;
 use serde::Deserialize;
 use std::path::Path;
 
@@ -145,13 +146,14 @@ crate::layer! {
 }
 
 crate::layer! {
-    /// How the model is fitted: the method and its settings.
+    /// How the model is fitted: the method, the settings every method shares, and each method's
+    /// own ([`MethodSettings`], from the registry: a method's options live in its module).
     #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
     #[cfg_attr(feature = "cli", derive(clap::Args))]
     #[serde(rename_all = "kebab-case")]
     pub struct MethodOptions {
         /// The method (see the list below).
-        #[cfg_attr(feature = "cli", arg(long, help = crate::method::Method::help()))]
+        #[cfg_attr(feature = "cli", arg(long, help = crate::registry::Method::help()))]
         pub method: Option<String>,
         /// Average into non-overlapping bins of this many seconds before fitting; 0 = off
         /// [default: 120, shortened on short runs to leave 60 bins].
@@ -166,43 +168,16 @@ crate::layer! {
             arg(long, allow_negative_numbers = true, value_parser = CENTERS_BAYES.count_parser())
         )]
         pub centers: Option<usize>,
-        /// No linear term (bayes); spec key `linear = false`.
-        #[cfg_attr(
-            feature = "cli",
-            arg(long = "no-linear", num_args = 0, default_missing_value = "false")
-        )]
-        pub linear: Option<bool>,
-        /// Do not offer bayes the cubic in the first feature as a basis (it is chosen only when
-        /// the Gaussians do not beat it by ln 20 in log evidence); spec key `cubic = false`.
-        #[cfg_attr(
-            feature = "cli",
-            arg(long = "no-cubic", num_args = 0, default_missing_value = "false")
-        )]
-        pub cubic: Option<bool>,
-        /// Do not offer bayes the additive structure (one-feature Gaussians placed one by one
-        /// beside the linear term, judged under AR(1) noise; chosen only by evidence); spec key
-        /// `additive = false`.
-        #[cfg_attr(
-            feature = "cli",
-            arg(long = "no-additive", num_args = 0, default_missing_value = "false")
-        )]
-        pub additive: Option<bool>,
-        /// Center selection of mse: kmeans (default) or ols (orthogonal least squares forward
-        /// selection).
-        #[cfg_attr(feature = "cli", arg(long))]
-        pub select: Option<String>,
+        /// Each method's own options (its struct's fields are keys and flags here).
+        #[serde(flatten)]
+        #[cfg_attr(feature = "cli", command(flatten))]
+        pub settings: MethodSettings,
         /// k-means seed.
         #[cfg_attr(
             feature = "cli",
             arg(long, allow_negative_numbers = true, value_parser = parse_seed)
         )]
         pub seed: Option<u64>,
-        /// Gradient-descent iterations.
-        #[cfg_attr(
-            feature = "cli",
-            arg(long, allow_negative_numbers = true, value_parser = ITERATIONS.count_parser())
-        )]
-        pub iterations: Option<usize>,
     }
 }
 
@@ -306,7 +281,7 @@ mod tests {
         assert_eq!(s.run.until, Some(100.5));
         assert_eq!(s.features.feature, ["T"]);
         assert_eq!(s.method.average, Some(30.0));
-        assert_eq!(s.method.linear, Some(false));
+        assert_eq!(s.method.settings.bayes.linear, Some(false));
         assert_eq!(s.method.seed, Some(7));
     }
 

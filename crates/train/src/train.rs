@@ -1,7 +1,8 @@
 //! `fit`: from a dataset and options to a blob, with a summary — the trainer's front door.
 //!
 //! Why here and not in the CLI: tests and benchmarks call exactly what `tcomp fit` runs. This module
-//! only orchestrates; what differs between methods is the method's ([`crate::method::FitMethod`]).
+//! only orchestrates; what differs between methods is the method's ([`crate::method::FitMethod`], found in
+//! [`crate::registry`]).
 //! The steps: select the window and check the column roles and time, find the gaps (warn; feature
 //! state is carried across them, or restarted after a long one), let the method rewrite the program (poly3), run the core's feature
 //! program over every row, check that features vary and are not collinear, record their ranges,
@@ -20,17 +21,10 @@ use serde::Serialize;
 use tcomp_core::ResidualLevel;
 
 pub use crate::fit_options::{FitOptions, parse_sensor};
-pub use crate::method::{DEFAULT_CENTERS, Method};
-pub use crate::rows::training_rows;
+pub use crate::method::DEFAULT_CENTERS;
+pub use crate::registry::{Method, MethodSettings};
+pub use crate::rows::{DEFAULT_AVERAGE_S, MIN_DEFAULT_BINS, training_rows};
 
-/// Default averaging bin before fitting (s), shortened to leave at least [`MIN_DEFAULT_BINS`] bins.
-/// Bias instability makes 1 Hz samples strongly correlated, and the evidence computed as if they
-/// were independent is overconfident: on the simulated QMA run, 30 s bins let the evidence pick 32
-/// narrow centers that learn a spurious temperature × rate interaction (held-out residual 17× the
-/// noise floor), while 120 s bins give 1.13× (measured). A 6-hour run still gives 180 bins.
-pub const DEFAULT_AVERAGE_S: f64 = 120.0;
-/// The default averaging is shortened on short runs so that at least this many bins remain.
-pub const MIN_DEFAULT_BINS: f64 = 60.0;
 /// Bin length of the residual level stored in the blob and of binned figures (s).
 pub const REPORT_BIN_S: f64 = 100.0;
 
@@ -93,7 +87,6 @@ pub fn fit_with_progress(
         0,
         crate::progress::Unit::Iterations,
     );
-    let method = opts.method.fitter();
     // Structure pins (`linear:`, `additive:`) come off the feature expressions here.
     let (features, pins) = crate::pin::split(&opts.spec.features)?;
     let mut stripped;
@@ -111,8 +104,9 @@ pub fn fit_with_progress(
     } else {
         String::new()
     };
+    let method = opts.fitter();
     check_samples(method, opts, &set.data, set.y.len(), after)?;
-    let fitted = method.fit(&mut set, opts, progress)?;
+    let fitted = method.fit(&mut set, &opts.shared(), progress)?;
     finish(set, prepared, fitted, opts)
 }
 
@@ -162,10 +156,14 @@ fn finish(
             bin_s: REPORT_BIN_S as f32,
         },
     };
-    let train = measure(&model, &data, opts)?;
+    // The stored program, compiled once for both encodings (the method may have replaced the
+    // one the rows were computed with: bayes choosing the cubic).
+    let program = model.spec.program()?;
+    let train = measure(&model.to_bytes_with(&program)?, &data, opts)?;
     model.residual.std = train.residual_std as f32;
     model.residual.binned_std = train.binned.residual_std as f32;
-    let final_bytes = model.to_bytes()?;
+    let final_bytes = model.to_bytes_with(&program)?;
+    drop(program);
     if let Err(e) =
         crate::blob_io::check_flight(std::path::Path::new("the new model"), &final_bytes)
     {
@@ -192,14 +190,10 @@ fn finish(
     Ok(Fitted { model, summary })
 }
 
-/// The training figures of `model`, through its decoded blob and the core's `Channel`.
-fn measure(
-    model: &OwnedModel,
-    data: &Dataset,
-    opts: &FitOptions,
-) -> Result<EvalReport, TrainError> {
-    let bytes = model.to_bytes()?;
-    let decoded = crate::blob_io::decode(std::path::Path::new("<new model>"), &bytes)?;
+/// The training figures of the model encoded as `bytes`, through its decoded blob and the core's
+/// `Channel`.
+fn measure(bytes: &[u8], data: &Dataset, opts: &FitOptions) -> Result<EvalReport, TrainError> {
+    let decoded = crate::blob_io::decode(std::path::Path::new("<new model>"), bytes)?;
     let roles = Roles {
         power_on_s: opts.power_on_s,
         ..Roles::of_model(&decoded)

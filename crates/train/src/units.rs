@@ -253,45 +253,6 @@ impl fmt::Display for Relation {
     }
 }
 
-/// A blob whose unit is `unit` spelt another way, re-encoded with `unit`'s spelling; `Ok(None)`
-/// when the blob already says `unit`, or says another quantity or scale (the caller's check then
-/// refuses it); an error naming the factor when the units are commensurable but not equal, since a
-/// model in one cannot be flown as the other.
-pub fn respell_blob(
-    path: &std::path::Path,
-    bytes: &[u8],
-    unit: &str,
-) -> Result<Option<Vec<u8>>, crate::TrainError> {
-    let m = crate::blob_io::decode(path, bytes)?;
-    if m.meta.unit == unit || m.meta.unit.is_empty() || unit.is_empty() {
-        return Ok(None);
-    }
-    let rel = match relate(m.meta.unit, unit) {
-        Ok(r) => r,
-        Err(_) => return Ok(None),
-    };
-    match rel {
-        Relation::Same => {
-            let mut re = m.clone();
-            re.meta.unit = unit;
-            let mut buf = vec![0u8; crate::blob_io::MAX_BLOB];
-            let len = re.encode(&mut buf).map_err(|e| crate::TrainError::Blob {
-                context: format!("{}: re-encoding with unit {unit}", path.display()),
-                source: crate::error::Core(e),
-            })?;
-            buf.truncate(len);
-            Ok(Some(buf))
-        }
-        Relation::Scaled(k) => Err(crate::TrainError::UnitScale {
-            file: path.display().to_string(),
-            model: m.meta.unit.to_string(),
-            board: unit.to_string(),
-            factor: crate::num::plain(k, 9),
-        }),
-        Relation::Different => Ok(None),
-    }
-}
-
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::panic)]
 mod tests {

@@ -177,9 +177,9 @@ fn held_out(
     o.reference = Some(p.reference.clone());
     o.method = Method::Bayes;
     o.centers = centers;
-    o.additive = additive;
+    o.settings.bayes.additive = Some(additive);
     if centers == Some(0) {
-        o.cubic = false;
+        o.settings.bayes.cubic = Some(false);
     }
     let f = fit(&p.train, &o).unwrap();
     if std::env::var("SHOW").is_ok() && additive {
@@ -411,7 +411,7 @@ fn pins_hold_a_feature_to_its_term() {
         o.spec.signals = p.signals.clone();
         o.spec.features = features.iter().map(|s| s.to_string()).collect();
         o.reference = Some(p.reference.clone());
-        o.additive = additive;
+        o.settings.bayes.additive = Some(additive);
         fit(&p.train, &o).unwrap()
     };
     let pinned = ["t_qma_c", "rate(t_qma_c)", "linear:supply_v"];

@@ -75,7 +75,7 @@ fn nan_inf_zero_negative_and_huge_values_are_refused_by_name() {
     );
     refused(
         with(|s| {
-            s.method.iterations = Some(0);
+            s.method.settings.gradient.iterations = Some(0);
         }),
         &["--iterations 0"],
     );
@@ -153,7 +153,7 @@ fn a_fit_over_the_memory_budget_is_refused_with_an_averaging_suggestion() {
     let mut opts = FitOptions::from_spec(&with(|s| {
         s.method.average = Some(0.0);
         s.method.method = Some("mse".into());
-        s.method.select = Some("ols".into());
+        s.method.settings.mse.select = Some("ols".into());
     }))
     .unwrap();
     opts.memory_budget = 4_000_000;
@@ -192,7 +192,7 @@ fn gradient_descent_reports_its_iterations() {
     let d = data(3000);
     let opts = FitOptions::from_spec(&with(|s| {
         s.method.method = Some("gradient".into());
-        s.method.iterations = Some(25);
+        s.method.settings.gradient.iterations = Some(25);
         s.method.centers = Some(4);
     }))
     .unwrap();

@@ -144,7 +144,7 @@ fn mems_cycle_cubic_models_fit_the_firmware() {
     // `--no-cubic`: the Gaussians alone, and nothing compared with them.
     let mut o = FitOptions::new("acc_z_m_s2", &["temp_imu_C"]);
     o.until = Some(3130.0);
-    o.cubic = false;
+    o.settings.bayes.cubic = Some(false);
     let f = fit(&d, &o).unwrap();
     assert_eq!(
         f.summary.details.basis,

@@ -122,7 +122,7 @@ fn bayes_generalises_better_than_mse_with_many_centers() {
         o.reference = Some(p.reference.clone());
         o.method = Method::Mse;
         o.centers = Some(32);
-        o.select = select;
+        o.settings.mse.select = Some(format!("{select:?}").to_lowercase());
         let f = fit(&p.train, &o).unwrap();
         assert_eq!(f.summary.centers, 32);
         let bytes = f.model.to_bytes().unwrap();

@@ -215,17 +215,27 @@ mod tests {
             let m = cmd.clone().try_get_matches_from(argv).ok()?;
             <Args as clap::FromArgMatches>::from_arg_matches(&m).ok()
         };
-        let plain = parse(&[]).map(|a| (a.method.linear, a.method.cubic));
+        let plain = parse(&[]).map(|a| {
+            (
+                a.method.settings.bayes.linear,
+                a.method.settings.bayes.cubic,
+            )
+        });
         assert_eq!(plain, Some((None, None)));
-        let off = parse(&["--no-linear", "--no-cubic"]).map(|a| (a.method.linear, a.method.cubic));
+        let off = parse(&["--no-linear", "--no-cubic"]).map(|a| {
+            (
+                a.method.settings.bayes.linear,
+                a.method.settings.bayes.cubic,
+            )
+        });
         assert_eq!(off, Some((Some(false), Some(false))));
         let mut file = Spec::default();
-        file.method.linear = Some(false);
+        file.method.settings.bayes.linear = Some(false);
         let flags = parse(&[]).map(|a| Spec {
             method: a.method,
             ..Spec::default()
         });
         let merged = file.merged(flags.unwrap_or_default());
-        assert_eq!(merged.method.linear, Some(false));
+        assert_eq!(merged.method.settings.bayes.linear, Some(false));
     }
 }

@@ -48,7 +48,6 @@ use crate::ar1::{fit_best_rho, whiten, whitened};
 use crate::rbf64::Rbf64;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-use serde::Serialize;
 
 /// Most positions per feature in the dictionary.
 const MAX_POSITIONS: usize = 24;
@@ -515,14 +514,4 @@ fn geometric_mean(v: &[f64]) -> f64 {
         return 0.0;
     }
     (v.iter().map(|x| x.max(1e-300).ln()).sum::<f64>() / v.len() as f64).exp()
-}
-
-/// How the structure was chosen, for the report: each structure compared with its log evidence.
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct StructureReport {
-    /// The chosen structure, as a line ("joint: 8 Gaussians over (T, rate(T)), σ 0.70",
-    /// "additive: 3 Gaussians over (T), σ 0.2–1.6 + linear in (supply_v)", "cubic …").
-    pub chosen: String,
-    /// Each structure compared and its log evidence (target units), best first.
-    pub compared: Vec<(String, f64)>,
 }

@@ -7,7 +7,8 @@
 //! each number of centers for the parsimony rule; [`Search`] holds both, so each step is a short
 //! method instead of one long function of closures.
 
-use super::additive::{Additive, StructureReport};
+use super::StructureReport;
+use super::additive::Additive;
 use super::{
     Basis, BayesFit, BayesOptions, CubicCandidate, FIRST_WIDTHS, Fitted, PARSIMONY, evidence_fit,
     margin_inflation, to_target_units,
