@@ -178,9 +178,9 @@ impl<'a> Refits<'a> {
     /// Log evidence of the trainer's refit of `features` on the whole training run (−∞ when it
     /// fails).
     pub(crate) fn log_evidence(&self, features: &[String]) -> f64 {
-        tcomp_train::fit(self.data, &self.options(features))
+        tcomp_train::fit_unmeasured(self.data, &self.options(features))
             .ok()
-            .and_then(|f| f.summary.details.evidence.map(|e| e.log_evidence))
+            .and_then(|(_, details)| details.evidence.map(|e| e.log_evidence))
             .unwrap_or(f64::NEG_INFINITY)
     }
 
@@ -239,14 +239,17 @@ fn heldout_std(r: &Refits<'_>, splits: &[Split], features: &[String]) -> Result<
     let mut each = Vec::with_capacity(splits.len());
     let mut binned = Vec::with_capacity(splits.len());
     for sp in splits {
-        let fitted = tcomp_train::fit(&sp.train, &o)?;
-        let bytes = fitted.model.to_bytes()?;
+        // The refit's own training figures are not read: it is measured on the held-out rows.
+        let (fitted, _) = tcomp_train::fit_unmeasured(&sp.train, &o)?;
+        let bytes = fitted.to_bytes()?;
         let model = tcomp_train::blob_io::decode(Path::new("<refit>"), &bytes)?;
-        let mut run =
-            metrics::run_model(&model, &sp.test, &Roles::of_model(&model), None, r.gap_s)?;
-        if let Some((lo, hi)) = sp.score {
-            run = run.window(lo, hi);
-        }
+        let roles = Roles::of_model(&model);
+        let run = match sp.score {
+            Some(window) => {
+                metrics::run_model_window(&model, &sp.test, &roles, None, r.gap_s, window)?
+            }
+            None => metrics::run_model(&model, &sp.test, &roles, None, r.gap_s)?,
+        };
         let b = metrics::report(&run, sp.bin_s).binned;
         sum += b.residual_std.powi(2) * b.bins as f64;
         count += b.bins;

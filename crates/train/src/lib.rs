@@ -65,5 +65,6 @@ pub use metrics::{EvalReport, Roles};
 pub use spec::{ChannelOptions, FeatureOptions, MethodOptions, RunOptions, Spec};
 pub use stream::{StreamOptions, eval_stream, eval_stream_reader};
 pub use train::{
-    FitOptions, FitSummary, Fitted, Method, MethodSettings, evaluate, fit, fit_with_progress,
+    FitOptions, FitSummary, Fitted, Method, MethodSettings, evaluate, fit, fit_unmeasured,
+    fit_with_progress,
 };

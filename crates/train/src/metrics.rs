@@ -118,12 +118,43 @@ pub fn run_model(
     temperature: Option<&str>,
     gap_s: Option<f64>,
 ) -> Result<Run, TrainError> {
-    /// [`run_at_capacity`] with its arguments, for [`step::in_flight_capacity`].
+    run_rows(model, data, roles, temperature, gap_s, data.len())
+}
+
+/// [`run_model`] scored on the rows with `lo ≤ time < hi` only, as [`Run::window`] of the whole
+/// run gives them: the model runs from the first row (its state continuous) and stops after the
+/// last row before `hi`. The model is causal and the gaps are found over the whole time column, so
+/// those rows' residuals are the whole run's, bit for bit; the flag counts are those of the rows
+/// run. For a block of a run scored many times (the diagnosis's held-out refits).
+pub fn run_model_window(
+    model: &HostModel<'_>,
+    data: &Dataset,
+    roles: &Roles,
+    temperature: Option<&str>,
+    gap_s: Option<f64>,
+    (lo, hi): (f64, f64),
+) -> Result<Run, TrainError> {
+    let time = data.time(&roles.time)?;
+    let until = time.iter().rposition(|&t| t < hi).map_or(0, |i| i + 1);
+    Ok(run_rows(model, data, roles, temperature, gap_s, until)?.window(lo, hi))
+}
+
+/// [`run_model`] over the first `until` rows (the gaps found over all of them).
+fn run_rows(
+    model: &HostModel<'_>,
+    data: &Dataset,
+    roles: &Roles,
+    temperature: Option<&str>,
+    gap_s: Option<f64>,
+    until: usize,
+) -> Result<Run, TrainError> {
+    /// [`run_until`] with its arguments, for [`step::in_flight_capacity`].
     struct RunAt<'d> {
         data: &'d Dataset,
         roles: &'d Roles,
         temperature: Option<&'d str>,
         gap_s: Option<f64>,
+        until: usize,
     }
     impl step::AtCapacity for RunAt<'_> {
         type Output = Result<Run, TrainError>;
@@ -131,7 +162,14 @@ pub fn run_model(
             self,
             model: &Model<'_, C2, F2, N2>,
         ) -> Self::Output {
-            run_at_capacity(model, self.data, self.roles, self.temperature, self.gap_s)
+            run_until(
+                model,
+                self.data,
+                self.roles,
+                self.temperature,
+                self.gap_s,
+                self.until,
+            )
         }
     }
     step::in_flight_capacity(
@@ -141,6 +179,7 @@ pub fn run_model(
             roles,
             temperature,
             gap_s,
+            until,
         },
     )
 }
@@ -152,6 +191,18 @@ pub fn run_at_capacity<const C2: usize, const F2: usize, const N2: usize>(
     roles: &Roles,
     temperature: Option<&str>,
     gap_s: Option<f64>,
+) -> Result<Run, TrainError> {
+    run_until(model, data, roles, temperature, gap_s, data.len())
+}
+
+/// [`run_at_capacity`] over the first `until` rows of `data`, the gaps found over all of them.
+fn run_until<const C2: usize, const F2: usize, const N2: usize>(
+    model: &Model<'_, C2, F2, N2>,
+    data: &Dataset,
+    roles: &Roles,
+    temperature: Option<&str>,
+    gap_s: Option<f64>,
+    until: usize,
 ) -> Result<Run, TrainError> {
     let time = data.time(&roles.time)?;
     let target = data.column(&roles.target)?;
@@ -168,15 +219,18 @@ pub fn run_at_capacity<const C2: usize, const F2: usize, const N2: usize>(
     let mut stepper = step::Stepper::new(model);
     stepper.set_time_on(crate::features::time_on_s(time, roles.power_on_s)? as f32);
     let mut inputs = vec![0.0f32; cols.len()];
+    let until = until.min(time.len());
+    let mut temp = temp;
+    temp.truncate(until);
     let mut run = Run {
-        time: time.to_vec(),
+        time: time.get(..until).unwrap_or(time).to_vec(),
         temperature: temp,
         gaps: starts.len().saturating_sub(1),
         restarted: crate::features::restarting_gaps(&model.program, time, &starts),
         ..Run::default()
     };
     let mut next = starts.iter().peekable();
-    for i in 0..time.len() {
+    for i in 0..until {
         let gap = next.next_if(|&&s| s == i).is_some();
         for (v, c) in inputs.iter_mut().zip(&cols) {
             *v = c.get(i).copied().unwrap_or(f64::NAN) as f32;

@@ -87,7 +87,31 @@ pub fn fit_with_progress(
         0,
         crate::progress::Unit::Iterations,
     );
-    // Structure pins (`linear:`, `additive:`) come off the feature expressions here.
+    let (set, prepared, fitted) = fit_parts(data, opts, progress)?;
+    finish(set, prepared, fitted, opts)
+}
+
+/// [`fit`] without the training figures: the model, its residual level left at zero (the
+/// compensator never reads it), and how the method chose it. For callers that measure a refit
+/// themselves on other rows — the diagnosis's held-out refits, where running each refit over its
+/// own training rows took a sixth of the time and its figures were never read.
+pub fn fit_unmeasured(
+    data: &Dataset,
+    opts: &FitOptions,
+) -> Result<(OwnedModel, MethodDetails), TrainError> {
+    let (set, prepared, fitted) = fit_parts(data, opts, &crate::progress::Silent)?;
+    let (model, _, details) = assemble(set, &prepared, fitted, opts)?;
+    Ok((model, details))
+}
+
+/// The training set, its preparation and the method's fit (what [`finish`] turns into a blob).
+/// The structure pins (`linear:`, `additive:`) come off the feature expressions here; the options
+/// [`finish`] reads do not depend on them.
+fn fit_parts(
+    data: &Dataset,
+    opts: &FitOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<(TrainingSet, Prepared, MethodFit), TrainError> {
     let (features, pins) = crate::pin::split(&opts.spec.features)?;
     let mut stripped;
     let opts = if pins.iter().any(|p| *p != crate::pin::Pin::Free) {
@@ -107,7 +131,7 @@ pub fn fit_with_progress(
     let method = opts.fitter();
     check_samples(method, opts, &set.data, set.y.len(), after)?;
     let fitted = method.fit(&mut set, &opts.shared(), progress)?;
-    finish(set, prepared, fitted, opts)
+    Ok((set, prepared, fitted))
 }
 
 /// The blob of a fitted method, measured through the decoded blob as it will fly, and the summary.
@@ -117,45 +141,14 @@ fn finish(
     fitted: MethodFit,
     opts: &FitOptions,
 ) -> Result<Fitted, TrainError> {
-    let TrainingSet {
+    let (mut model, rest, details) = assemble(set, &prepared, fitted, opts)?;
+    let Assembled {
         data,
-        spec,
-        ranges,
-        y,
+        y_len,
         mut warnings,
-        ..
-    } = set;
-    let MethodFit {
         rbf,
         width,
-        details,
-    } = fitted;
-    let width = width
-        .filter(|w| *w != 0.0)
-        .unwrap_or_else(|| rbf.gamma.first().map_or(0.0, |g| (0.5 / g).sqrt()));
-    let time = data.time(&opts.time)?;
-    let t0 = time.first().copied().unwrap_or(0.0);
-    let t1 = time.last().copied().unwrap_or(0.0);
-    let mut model = OwnedModel {
-        sensor: opts.sensor,
-        axis: opts.axis.clone(),
-        unit: opts.unit.clone(),
-        method: opts.method.to_string(),
-        time: opts.time.clone(),
-        target: opts.target.clone(),
-        reference: opts.reference.clone().unwrap_or_default(),
-        reference_value: prepared.reference_value.map(|v| v as f32),
-        trained_on: crate::blob_io::TrainedOn::text(data.file(), t0, t1),
-        train_samples: y.len() as u32,
-        spec,
-        ranges,
-        rbf: rbf.to_core()?,
-        residual: ResidualLevel {
-            std: 0.0,
-            binned_std: 0.0,
-            bin_s: REPORT_BIN_S as f32,
-        },
-    };
+    } = rest;
     // The stored program, compiled once for both encodings (the method may have replaced the
     // one the rows were computed with: bayes choosing the cubic).
     let program = model.spec.program()?;
@@ -180,7 +173,7 @@ fn finish(
         details,
         linear: rbf.linear.clone(),
         train_rows: data.len(),
-        train_bins: y.len(),
+        train_bins: y_len,
         average_s: prepared.average_s,
         reference_value: prepared.reference_value,
         train,
@@ -188,6 +181,71 @@ fn finish(
         blob_bytes: final_bytes.len(),
     };
     Ok(Fitted { model, summary })
+}
+
+/// What [`assemble`] leaves besides the model and the method's details, for the summary.
+struct Assembled {
+    data: Dataset,
+    y_len: usize,
+    warnings: Vec<String>,
+    rbf: crate::rbf64::Rbf64,
+    width: f64,
+}
+
+/// The blob of a fitted method (residual level zero until measured).
+fn assemble(
+    set: TrainingSet,
+    prepared: &Prepared,
+    fitted: MethodFit,
+    opts: &FitOptions,
+) -> Result<(OwnedModel, Assembled, MethodDetails), TrainError> {
+    let TrainingSet {
+        data,
+        spec,
+        ranges,
+        y,
+        warnings,
+        ..
+    } = set;
+    let MethodFit {
+        rbf,
+        width,
+        details,
+    } = fitted;
+    let width = width
+        .filter(|w| *w != 0.0)
+        .unwrap_or_else(|| rbf.gamma.first().map_or(0.0, |g| (0.5 / g).sqrt()));
+    let time = data.time(&opts.time)?;
+    let t0 = time.first().copied().unwrap_or(0.0);
+    let t1 = time.last().copied().unwrap_or(0.0);
+    let model = OwnedModel {
+        sensor: opts.sensor,
+        axis: opts.axis.clone(),
+        unit: opts.unit.clone(),
+        method: opts.method.to_string(),
+        time: opts.time.clone(),
+        target: opts.target.clone(),
+        reference: opts.reference.clone().unwrap_or_default(),
+        reference_value: prepared.reference_value.map(|v| v as f32),
+        trained_on: crate::blob_io::TrainedOn::text(data.file(), t0, t1),
+        train_samples: y.len() as u32,
+        spec,
+        ranges,
+        rbf: rbf.to_core()?,
+        residual: ResidualLevel {
+            std: 0.0,
+            binned_std: 0.0,
+            bin_s: REPORT_BIN_S as f32,
+        },
+    };
+    let rest = Assembled {
+        data,
+        y_len: y.len(),
+        warnings,
+        rbf,
+        width,
+    };
+    Ok((model, rest, details))
 }
 
 /// The training figures of the model encoded as `bytes`, through its decoded blob and the core's
