@@ -190,3 +190,71 @@ fn narrow_and_wide_runs_agree() {
     );
     assert_eq!(narrow.out_of_range, wide.out_of_range);
 }
+
+/// The diagnosis's held-out refits: `fit_unmeasured` gives `fit`'s model but for the residual level
+/// (left at zero, never read by the compensator), and `run_model_window` gives a window of the
+/// whole run bit for bit (the model is causal; the gaps are found over the whole run). Windows at
+/// the start, in the middle (after a gap cut into the time column) and open-ended.
+#[test]
+fn unmeasured_refits_and_windowed_runs_agree() {
+    let p = pair("qma");
+    let mut o = FitOptions::new(&p.target, &[]);
+    o.spec.signals = p.signals.clone();
+    o.spec.features = p.features.clone();
+    o.reference = Some(p.reference.clone());
+    let f = fit(&p.train, &o).unwrap();
+    let (mut unmeasured, details) = tcomp_train::fit_unmeasured(&p.train, &o).unwrap();
+    assert_eq!(
+        details.evidence.map(|e| e.log_evidence.to_bits()),
+        f.summary.details.evidence.map(|e| e.log_evidence.to_bits())
+    );
+    assert_eq!(unmeasured.residual.std, 0.0);
+    unmeasured.residual = f.model.residual;
+    assert_eq!(unmeasured.to_bytes().unwrap(), f.model.to_bytes().unwrap());
+
+    let bytes = f.model.to_bytes().unwrap();
+    let m = blob_io::decode(std::path::Path::new("mem"), &bytes).unwrap();
+    let roles = Roles::of_model(&m);
+    // A gap of 30 rows cut out a third of the way in.
+    let time = p.verify.time(&roles.time).unwrap().to_vec();
+    let cut = time.len() / 3;
+    let cols = p
+        .verify
+        .names()
+        .iter()
+        .map(|n| {
+            let c = p.verify.column(n).unwrap();
+            c.iter()
+                .enumerate()
+                .filter(|(i, _)| !(cut..cut + 30).contains(i))
+                .map(|(_, v)| *v)
+                .collect()
+        })
+        .collect();
+    let gappy = Dataset::from_columns("gappy", p.verify.names().to_vec(), cols);
+    let t = gappy.time(&roles.time).unwrap();
+    let (t0, t1) = (t[0], t[t.len() - 1]);
+    let span = t1 - t0;
+    for (lo, hi) in [
+        (f64::NEG_INFINITY, t0 + 0.2 * span),
+        (t0 + 0.3 * span, t0 + 0.6 * span),
+        (t0 + 0.7 * span, f64::INFINITY),
+    ] {
+        let whole = tcomp_train::metrics::run_model(&m, &gappy, &roles, None, None)
+            .unwrap()
+            .window(lo, hi);
+        let part = tcomp_train::metrics::run_model_window(&m, &gappy, &roles, None, None, (lo, hi))
+            .unwrap();
+        assert!(!part.residual.is_empty());
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&part.time), bits(&whole.time), "[{lo}, {hi})");
+        assert_eq!(bits(&part.residual), bits(&whole.residual), "[{lo}, {hi})");
+        assert_eq!(bits(&part.error), bits(&whole.error), "[{lo}, {hi})");
+        assert_eq!(
+            bits(&part.temperature),
+            bits(&whole.temperature),
+            "[{lo}, {hi})"
+        );
+        assert_eq!(part.gaps, whole.gaps);
+    }
+}
