@@ -316,8 +316,12 @@ pub fn confirm(
     // The compositions ([`crate::compose`]) have slots of their own: a search of many shapes must
     // not crowd the listed families out of their refits (measured: the demo's Shupe term, judged
     // on its held-out refits, lost its slot to three compositions and went unnamed).
-    let composed =
-        |i: &usize| matches!(cands[*i].searched, crate::candidates::Searched::Alternatives { .. });
+    let composed = |i: &usize| {
+        matches!(
+            cands[*i].searched,
+            crate::candidates::Searched::Alternatives { .. }
+        )
+    };
     let listed: Vec<usize> = order
         .iter()
         .copied()
