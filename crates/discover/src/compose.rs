@@ -375,14 +375,14 @@ impl<'a> Screen<'a> {
             return f64::NEG_INFINITY;
         }
         let (m, sd) = crate::design::mean_sd(&c);
-        if !(sd > 1e-12) || !sd.is_finite() {
+        if sd.is_nan() || sd <= 1e-12 || !sd.is_finite() {
             return f64::NEG_INFINITY;
         }
         let c = DVector::from_iterator(c.len(), c.iter().map(|v| (v - m) / sd));
         let u = self.p.phi.tr_mul(&c);
         let s = self.beta * c.dot(&c) - self.beta * self.beta * (u.transpose() * &self.cov * &u)[0];
         let q = self.beta * c.dot(&self.r);
-        if !(s > 1e-12) || !q.is_finite() {
+        if s.is_nan() || s <= 1e-12 || !q.is_finite() {
             return f64::NEG_INFINITY;
         }
         let q2 = q * q;
@@ -535,7 +535,7 @@ fn shape_of(
     let shifted = level && b.shift_matters && !own_location;
     let (lo, hi) = spread(&values(p, operand))?;
     let width = hi - lo;
-    if !(width > 0.0) {
+    if width.is_nan() || width <= 0.0 {
         return None;
     }
     let mut ranges = Vec::new();
@@ -550,14 +550,12 @@ fn shape_of(
         ranges.push(param_range(q, times, Some((lo, hi))));
     }
     let switching = shifted && ranges.get(1).is_some_and(|r| r.role == Role::Threshold);
-    if switching {
-        if let Some(r) = ranges.get_mut(1) {
-            *r = Range {
-                lo,
-                hi,
-                role: Role::Location,
-            };
-        }
+    if let Some(r) = ranges.get_mut(1).filter(|_| switching) {
+        *r = Range {
+            lo,
+            hi,
+            role: Role::Location,
+        };
     }
     Some(Shape {
         operand: Some(operand.clone()),
@@ -728,10 +726,8 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
                 Op::Times(_) => false,
             };
         for &(f, b) in functions.iter().filter(|(f, _)| allowed(f, &e)) {
-            if let Op::Call(g) = &n.shape.op {
-                if g.name == f.name && !b.keeps_level {
-                    continue;
-                }
+            if matches!(&n.shape.op, Op::Call(g) if g.name == f.name && !b.keeps_level) {
+                continue;
             }
             next.extend(shape_of(p, times, f, b, &e, level));
         }
@@ -968,6 +964,7 @@ mod tests {
     /// What each function does to a level is read off the evaluator: lag and rate and the square
     /// need no shift, a relay and a kink do; a lag keeps a level a level.
     #[test]
+    #[allow(clippy::unwrap_used)]
     fn behaviours_are_measured_not_listed() {
         let b = |name: &str| lang::function(name).and_then(behaviour).unwrap();
         assert!(!b("lag").shift_matters && b("lag").keeps_level);

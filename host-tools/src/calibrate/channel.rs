@@ -191,11 +191,13 @@ pub fn run(plan: &ChannelPlan, w: &Windows<'_>, s: Settings) -> anyhow::Result<C
 /// The diagnosis of `fit` on the training rows alone (blocks of them held out in turn).
 fn diagnose(fit: &Fit, train: &Dataset, gap: Option<f64>) -> anyhow::Result<Analysis> {
     let model = tcomp_train::blob_io::decode(std::path::Path::new("model"), &fit.bytes)?;
-    let mut opts = DiagnoseOptions::default();
     // The listed effects only: a line's diagnosis flags units whose model misses a known effect,
     // and the search of compositions would cost the fleet's time budget (issue 24: 1,000 units in
     // 5 min) for effects a line does not act on. `tcomp diagnose` searches them.
-    opts.compose = false;
+    let mut opts = DiagnoseOptions {
+        compose: false,
+        ..DiagnoseOptions::default()
+    };
     opts.score.gap_s = gap;
     opts.score.bin_s = 60.0;
     Ok(tcomp_discover::diagnose(&model, train, None, &opts)?)
