@@ -596,7 +596,7 @@ fn param_range(q: &lang::Param, times: (f64, f64), operand: Option<(f64, f64)>) 
 /// The signature of an expression: its text with every number replaced by `#` and every numeric
 /// argument of a call dropped (the same shape at any parameter, a defaulted one included:
 /// `rate(x)` and `rate(x, 67)` are one shape).
-fn signature(e: &str) -> String {
+pub fn signature(e: &str) -> String {
     numbered(e).replace(",#", "")
 }
 

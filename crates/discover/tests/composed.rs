@@ -49,32 +49,10 @@ fn numbers(e: &str) -> Vec<f64> {
     out
 }
 
-/// The shape of an expression: its text without spaces, every number `#`, numeric arguments
-/// dropped (a defaulted window and a printed one are one shape).
+/// The shape of an expression: the composer's own signature (numbers and numeric arguments
+/// dropped, so a defaulted window and a printed one are one shape).
 fn shape(e: &str) -> String {
-    numbered(e).replace(",#", "")
-}
-
-/// `e` without spaces, every number `#`.
-fn numbered(e: &str) -> String {
-    let mut out = String::new();
-    let mut skip = false;
-    let mut prev_word = false;
-    for ch in e.chars().filter(|c| !c.is_whitespace()) {
-        if skip && (ch.is_ascii_digit() || ch == '.' || ch == 'e') {
-            continue;
-        }
-        skip = false;
-        if ch.is_ascii_digit() && !prev_word {
-            out.push('#');
-            skip = true;
-            prev_word = false;
-            continue;
-        }
-        prev_word = ch.is_alphanumeric() || ch == '_';
-        out.push(ch);
-    }
-    out
+    tcomp_discover::compose::signature(e)
 }
 
 /// Runs `s`: returns the outcome's text, whether it named the shape, and the ratios after and
