@@ -154,13 +154,14 @@ scenarios! {
     a_saturating_input: "saturating input", Qma, [Poly], 36, "clamp(supply_v, 27.9, 28.3)", 6.0, true, 0.02;
     the_rate_of_an_input: "rate of an input", Qma, [Poly], 41, "rate(supply_v, 600)", 6.0, true, 0.25;
     a_relay_on_a_gradients_rate: "relay on a gradient's rate", Rlg, [Poly], 42, "hyst(rate(t_anode_c - t_shell_c), 0.05)", 6.0, false, 0.25;
-    /// Missed (measured: verdict none, 2.03× the floor where the truth form reaches 1.01×): a
-    /// relay 6 °C wide is too narrow for the coarse screen's grid over an 80 °C range.
+    /// Missed (measured: verdict none, 2.03× the floor where the truth form reaches 1.01×): the
+    /// truth gains 32 nats, but moving one switching point by 1 °C drops it below 4 — too sharp a
+    /// peak for the coarse screen's grid over an 80 °C range.
     #[ignore = "a known miss: run with --ignored to measure it"]
     a_narrow_mode_hop: "narrow mode hop", Qma, [Poly], 32, "hyst(t_qma_c + 5, 3)", 6.0, false, 0.02;
-    /// Missed (measured: "cannot tell" between `supply_v` and `sq(supply_v)`, 7.5× where the
-    /// truth form reaches 1.18×).
-    #[ignore = "a known miss: run with --ignored to measure it"]
+    /// Named as `lag(rate(supply_v, 64), 480)`, the same shape (linear filters commute): 1.41×
+    /// where the truth form reaches 1.18× (was "cannot tell", 7.5×, before the inner lag was
+    /// re-estimated with the outer rate).
     the_rate_of_a_lagged_input: "rate of a lagged input", Qma, [Poly], 33, "rate(lag(supply_v, 600))", 6.0, true, 0.25;
     /// Missed (measured: verdict none, 8.4× where the truth form reaches 1.14×): the refits with
     /// `rate(t_qma_c)` extrapolate badly to held-out blocks (the joint fit's problem, issue 25).
@@ -170,8 +171,9 @@ scenarios! {
     /// form reaches 1.51×).
     #[ignore = "a known miss: run with --ignored to measure it"]
     a_lagged_rate: "lagged rate", Qma, [Poly], 37, "lag(rate(t_qma_c), 1200)", 6.0, false, 0.25;
-    /// Missed: named `clamp(lag(supply_v, 410), 27.6, 28.5)`, 2.80× where the truth form reaches
-    /// 1.01×.
+    /// Missed: named `lag(clamp(supply_v, 27.9, 28.4), 580)`, 2.63× where the truth form reaches
+    /// 1.01× (the truth gains 168 nats on every row, the clamp 151, but the relay's switching
+    /// points sit beyond the joint refinement's reach from the inner relay's estimate).
     #[ignore = "a known miss: run with --ignored to measure it"]
     a_lagged_relay_on_an_input: "lagged relay on an input", Qma, [Poly], 39, "lag(hyst(supply_v - 28.2, 0.2), 600)", 6.0, true, 0.25;
     /// Not identifiable on this run: the supply wanders ±2 %, so `supply_v * t_qma_c` is 28·T
