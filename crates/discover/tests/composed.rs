@@ -191,6 +191,23 @@ scenarios! {
     a_mode_hop_seen_through_a_lag: "mode hop of a lagging element", Qma, [Poly], 38, "hyst(lag(t_qma_c, 1800) - 15, 8)", 6.0, false, 0.25;
 }
 
+// Held out of the design: written after it was fixed and run once, each figure as measured
+// (BENCHMARKS.md); a miss stays ignored with its figure rather than the design tuned to it.
+scenarios! {
+    a_saturating_lagged_input: "saturating lagged input", Qma, [Poly], 51, "clamp(lag(supply_v, 900), 27.8, 28.4)", 6.0, true, 0.25;
+    /// Named as the gradient alone, 1.04× where the truth form reaches 1.03×: the supply wanders
+    /// ±2 %, so the product is 28× the gradient within the noise (the run cannot tell them).
+    #[ignore = "not identifiable here: run with --ignored to measure it"]
+    a_gradient_times_an_input: "gradient × input", Rlg, [Poly], 52, "(t_anode_c - t_shell_c) * supply_v", 6.0, false, 0.25;
+    a_v_shaped_input: "V-shaped input", Qma, [Poly], 53, "abs(supply_v - 28)", 6.0, true, 0.25;
+    /// Missed (verdict none, 5.67× where the truth form reaches 1.00×): the warm-up was found
+    /// (τ 850 s, placebos cleared) but the held-out blocks cannot confirm it — all its variation
+    /// sits in the first of 5 equal blocks, so a fit on the other four cannot learn it (2 of 5
+    /// blocks lowered, pooled 6.7 %).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    a_warm_up_scaled_by_temperature: "warm-up × temperature", Qma, [Poly], 54, "warmup(900) * t_qma_c", 6.0, false, 0.25;
+}
+
 #[test]
 fn shapes_and_numbers_are_read() {
     assert_eq!(shape("hyst(t_qma_c - 35.5, 6)"), "hyst(t_qma_c-#)");
