@@ -75,6 +75,46 @@ pub(super) fn training_blocks(
     Ok(out)
 }
 
+/// The window `[lo, hi)` of the training run (bounded by its first and last rows) cut into `k`
+/// equal parts, each predicted by a fit on the rest of the run: how an effect confined to one
+/// block is tested (see `super::localized`).
+pub(super) fn parts_of(
+    roles: &Roles,
+    data: &Dataset,
+    opts: &ConfirmOptions,
+    (lo, hi): (f64, f64),
+    k: usize,
+) -> Result<Vec<Split>> {
+    let t = data.time(&roles.time)?;
+    let (t0, t1) = (
+        t.first().copied().unwrap_or(0.0),
+        t.last().copied().unwrap_or(0.0),
+    );
+    let (lo, hi) = (lo.max(t0), hi.min(t1));
+    let mut out = Vec::new();
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+        return Ok(out);
+    }
+    for i in 0..k {
+        let a = lo + (hi - lo) * i as f64 / k as f64;
+        let b = if i + 1 == k {
+            f64::INFINITY.min(hi + 1e-9 * hi.abs().max(1.0))
+        } else {
+            lo + (hi - lo) * (i + 1) as f64 / k as f64
+        };
+        let part = data.select_time(&roles.time, a, b)?;
+        let bin_s =
+            tcomp_train::binning::adaptive_bin(part.time(&roles.time)?, opts.heldout_bin_s, 10);
+        out.push(Split {
+            train: without(data, t, a, b),
+            test: data.clone(),
+            bin_s,
+            score: Some((a, b)),
+        });
+    }
+    Ok(out)
+}
+
 /// `k` equal blocks of the run's time span (the last one open-ended).
 fn equal_edges(t: &[f64], k: usize) -> Vec<f64> {
     let (t0, t1) = (
