@@ -165,8 +165,9 @@ scenarios! {
     /// where the truth form reaches 1.18× (was "cannot tell", 7.5×, before the inner lag was
     /// re-estimated with the outer rate).
     the_rate_of_a_lagged_input: "rate of a lagged input", Qma, [Poly], 33, "rate(lag(supply_v, 600))", 6.0, true, 0.25;
-    /// Missed (measured: verdict none, 8.4× where the truth form reaches 1.14×): the refits with
-    /// `rate(t_qma_c)` extrapolate badly to held-out blocks (the joint fit's problem, issue 25).
+    /// Missed: named two thermal paths from `t_qma_c` (τ 120 s and 22 min, the rate of T in
+    /// another form; the supply wanders ±2 %), 1.53× where the truth form reaches 1.14× (before
+    /// still blocks stopped voting: verdict none, 8.4×).
     #[ignore = "a known miss: run with --ignored to measure it"]
     an_input_times_a_rate: "input × rate", Qma, [Poly], 34, "supply_v * rate(t_qma_c)", 6.0, false, 0.25;
     /// Named as the nearest listed shape, `lag(t_qma_c, 1200)` (measured 1.73× where the truth
