@@ -7,7 +7,6 @@
 
 use crate::design::{Columns, Transform, compute_binned, error_of, floor_estimate, hcat, mean_sd};
 use crate::error::{DiscoverError, Result};
-use crate::score::ScoreOptions;
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use tcomp_train::bayes::{self, BayesOptions};
@@ -15,7 +14,72 @@ use tcomp_train::binning::{bin_mean, bins};
 use tcomp_train::dataset::segments;
 use tcomp_train::evidence::{self, GroupFit};
 use tcomp_train::features::FeatureSpec;
-use tcomp_train::{Dataset, Roles};
+use tcomp_train::options::Bound;
+use tcomp_train::{Dataset, Roles, TrainError};
+
+/// The number of contiguous blocks in cross-validation on the training run: two at least (one to
+/// fit, one to predict); more than 100 leaves blocks of a few bins that say nothing.
+pub const FOLDS: Bound = Bound {
+    flag: "folds",
+    key: "",
+    min: 2.0,
+    min_exclusive: false,
+    max: 100.0,
+    unit: "",
+    why: "contiguous blocks of the training run held out in turn",
+};
+
+/// Scoring options.
+#[derive(Clone, Debug)]
+pub struct ScoreOptions {
+    /// Averaging bin before fitting (s).
+    pub bin_s: f64,
+    /// Bin of the held-out residual on a verification run (s).
+    pub heldout_bin_s: f64,
+    /// Contiguous blocks of the training run when there is no verification run.
+    pub folds: usize,
+    /// Gap threshold (s).
+    pub gap_s: Option<f64>,
+}
+
+impl Default for ScoreOptions {
+    fn default() -> Self {
+        Self {
+            bin_s: 60.0,
+            heldout_bin_s: 100.0,
+            folds: 5,
+            gap_s: None,
+        }
+    }
+}
+
+/// A bin length in seconds: positive, and under 10⁷ s (longer than any chamber run). Against the
+/// data, a bin must also hold samples; [`tcomp_train::options::check_bin`] checks that once the
+/// data are known.
+const fn bin_bound(flag: &'static str) -> Bound {
+    Bound {
+        flag,
+        key: "",
+        min: 0.0,
+        min_exclusive: true,
+        max: 1e7,
+        unit: "s",
+        why: "an averaging bin",
+    }
+}
+
+impl ScoreOptions {
+    /// Checks the bins, the folds and the gap against their valid ranges.
+    pub fn validate(&self) -> std::result::Result<(), TrainError> {
+        bin_bound("--bin").check(self.bin_s)?;
+        bin_bound("heldout_bin_s").check(self.heldout_bin_s)?;
+        FOLDS.check_count(self.folds, "")?;
+        if let Some(g) = self.gap_s {
+            tcomp_train::options::GAP.check(g)?;
+        }
+        Ok(())
+    }
+}
 
 /// Held-out data.
 enum HeldOut {

@@ -24,12 +24,12 @@
 
 use crate::families::{Template, existing_rate, kind_named, language_has};
 use crate::program;
-use serde::Serialize;
 use tcomp_core::expr::{self, Expr};
 use tcomp_core::parse::is_column_name;
 use tcomp_train::Dataset;
 
-pub use crate::families::Search;
+pub use crate::families::{Family, Search};
+pub use crate::hypothesis::{Candidate, EffectKind, Searched};
 
 /// Lag time constants of the scoring grid (s); [`crate::param`] then searches `LAG_RANGE_S`.
 pub const LAG_TAUS_S: [f64; 6] = [300.0, 600.0, 1200.0, 2400.0, 4800.0, 9600.0];
@@ -47,104 +47,6 @@ pub const HYST_RANGE: (f64, f64) = (0.01, 0.4);
 pub const RATE_WINDOWS_S: [f64; 2] = [60.0, 240.0];
 /// The range a rate window is searched over (s).
 pub const RATE_RANGE_S: (f64, f64) = (30.0, 1200.0);
-
-/// The kind of physical effect a candidate stands for: the core's vocabulary, shared with the
-/// simulator (which hides effects of these kinds).
-pub use tcomp_core::EffectKind;
-
-/// One candidate: the features to add, or to put in place of some of the model's.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Candidate {
-    /// Effect kind.
-    pub kind: EffectKind,
-    /// Physical name, e.g. "Shupe-type T·dT/dt of t_coil_c".
-    pub effect: String,
-    /// Feature expressions to add (one, or two/three for gradient sets), or to put in place of
-    /// `replaces`.
-    pub expressions: Vec<String>,
-    /// The searched parameter: τ (s) for lags and warm-up, threshold for hysteresis, window (s)
-    /// for rates.
-    pub parameter: Option<f64>,
-    /// The model's features the expressions replace, in order (empty: they are added).
-    pub replaces: Vec<String>,
-    /// Set when the candidate only re-states a feature the model already has (its rate with
-    /// another window): a refinement of that feature, not a missing effect.
-    pub refines: Option<String>,
-}
-
-impl Candidate {
-    /// A candidate added beside the model's features.
-    pub fn added(kind: EffectKind, effect: String, expressions: Vec<String>, p: f64) -> Self {
-        Candidate {
-            kind,
-            effect,
-            expressions,
-            parameter: Some(p),
-            replaces: Vec::new(),
-            refines: None,
-        }
-    }
-
-    /// The feature list `features` with this candidate applied: each replaced feature swapped for
-    /// its new expression in place, the others appended.
-    pub fn applied_to(&self, features: &[String]) -> Vec<String> {
-        let mut out: Vec<String> = features.to_vec();
-        let mut extra = Vec::new();
-        for (k, e) in self.expressions.iter().enumerate() {
-            match self
-                .replaces
-                .get(k)
-                .and_then(|r| out.iter().position(|f| f == r))
-            {
-                Some(i) => {
-                    if let Some(slot) = out.get_mut(i) {
-                        slot.clone_from(e);
-                    }
-                }
-                None => extra.push(e.clone()),
-            }
-        }
-        out.extend(extra);
-        out
-    }
-}
-
-/// A hypothesis: candidates differing only in a searched parameter.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Family {
-    /// Members scored (one for a plain candidate; the grid of a searched parameter).
-    pub members: Vec<Candidate>,
-    /// How the parameter is searched beyond the grid (none for a plain candidate).
-    pub search: Option<Search>,
-    /// How the member was read off the data, when it was rather than built by a template: what
-    /// each of its placebos searches the same way ([`crate::placebo`]).
-    pub searched: Searched,
-}
-
-/// How a candidate was read off the data, when not by a template's parameter.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub enum Searched {
-    /// Not read off the data: a plain candidate, or a template's family ([`Family::search`]).
-    #[default]
-    No,
-    /// Read off a bank of columns by automatic relevance determination ([`crate::dynamics`]).
-    Bank(Vec<String>),
-    /// The best of these alternatives, each a whole candidate: a composition's members across its
-    /// parameters ([`crate::compose`]), chosen among `among` shapes searched.
-    Alternatives {
-        /// The members, each one expression.
-        members: Vec<String>,
-        /// Shapes the composition was chosen among.
-        among: usize,
-    },
-}
-
-impl Searched {
-    /// Whether the candidate was read off the data this way.
-    pub fn is_read(&self) -> bool {
-        !matches!(self, Searched::No)
-    }
-}
 
 /// What candidates are built from.
 #[derive(Clone, Debug, Default)]
@@ -223,11 +125,6 @@ pub fn sources(data: &Dataset, exclude: &[&str], signals: &[String]) -> Sources 
         }
     }
     s
-}
-
-/// A number as the expressions print it, without a trailing `.0`.
-pub(crate) fn num(v: f64) -> String {
-    Expr::num(v).to_string()
 }
 
 fn single(kind: EffectKind, effect: String, exprs: Vec<Expr>) -> Family {

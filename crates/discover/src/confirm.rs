@@ -23,6 +23,7 @@
 //! (a lag of T in place of T) is refitted with the replaced feature set. Each confirmed candidate
 //! also carries the Δ log evidence of the real refits, which ranks the candidates that pass.
 
+pub use crate::findings::{Confirmation, Verification};
 use crate::score::{Prepared, Scored};
 use crate::{ModelInfo, Result};
 use rayon::prelude::*;
@@ -70,42 +71,6 @@ impl ConfirmOptions {
         crate::score::FOLDS.check_count(self.folds, "")?;
         Ok(())
     }
-}
-
-/// The real refit of one candidate.
-#[derive(Clone, Debug, Serialize)]
-pub struct Confirmation {
-    /// Held-out residual std (binned) of the refitted base feature set.
-    pub residual_std_before: f64,
-    /// The same with the candidate added.
-    pub residual_std_after: f64,
-    /// 100·(1 − after/before).
-    pub improvement_pct: f64,
-    /// What the held-out data was.
-    pub heldout: String,
-    /// Held-out blocks (1 for a verification run) in which the candidate lowered the residual.
-    pub splits_improved: usize,
-    /// Held-out blocks.
-    pub splits: usize,
-    /// Δ log evidence of the trainer's refits on the whole training run: with the candidate
-    /// minus without.
-    pub delta_log_evidence_refit: f64,
-    /// The same refits on the verification run, when there is one: reported, never used to
-    /// choose (the figures above, on blocks of the training run, are what the criterion reads).
-    pub verification: Option<Verification>,
-}
-
-/// A confirmed candidate's figures on the verification run.
-#[derive(Clone, Debug, Serialize)]
-pub struct Verification {
-    /// What the run was.
-    pub run: String,
-    /// Binned residual std of the refitted base feature set on it.
-    pub residual_std_before: f64,
-    /// The same with the candidate added.
-    pub residual_std_after: f64,
-    /// 100·(after/before − 1): negative when the residual fell.
-    pub change_pct: f64,
 }
 
 /// What the confirmation measured of the base feature set, for the criterion and the report.

@@ -8,10 +8,22 @@
 //! value the optimiser asks for. Every expression is built as a tree ([`tcomp_core::expr`]) and
 //! printed by its one printer.
 
-use crate::candidates::{Candidate, EffectKind, num};
+use crate::hypothesis::{Candidate, EffectKind, Searched, num};
 use crate::program;
 use serde::Serialize;
 use tcomp_core::expr::{self, Expr};
+
+/// A hypothesis: candidates differing only in a searched parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Family {
+    /// Members scored (one for a plain candidate; the grid of a searched parameter).
+    pub members: Vec<Candidate>,
+    /// How the parameter is searched beyond the grid (none for a plain candidate).
+    pub search: Option<Search>,
+    /// How the member was read off the data, when it was rather than built by a template: what
+    /// each of its placebos searches the same way ([`crate::placebo`]).
+    pub searched: Searched,
+}
 
 /// A family's parameter as [`crate::param`] searches it: the template that builds a member, and
 /// the range of the search (log scale).
@@ -212,10 +224,10 @@ impl Template {
     }
 
     /// The family: its members on `grid`, searched over `[lo, hi]`.
-    pub fn family(self, grid: &[f64], lo: f64, hi: f64) -> crate::candidates::Family {
-        crate::candidates::Family {
+    pub fn family(self, grid: &[f64], lo: f64, hi: f64) -> Family {
+        Family {
             members: grid.iter().map(|&p| self.member(p)).collect(),
-            searched: crate::candidates::Searched::No,
+            searched: Searched::No,
             search: Some(Search {
                 template: self,
                 lo,

@@ -153,7 +153,7 @@ pub fn params_of(k: usize, e: &str) -> Vec<Param> {
 fn with_value(features: &[String], p: &Param, v: f64) -> Vec<String> {
     let mut f = features.to_vec();
     if let Some(e) = f.get_mut(p.feature) {
-        let text = crate::candidates::num(v);
+        let text = crate::hypothesis::num(v);
         e.replace_range(p.at.0..p.at.1, &text);
     }
     f

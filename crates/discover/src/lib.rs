@@ -3,14 +3,15 @@
 //! watch the error fall.
 //!
 //! Modules: [`segments`] (where it fails: warm-up, holds, ramps, bands, worst intervals),
-//! [`candidates`] (which effects could be missing, with physical names and ready expressions),
+//! [`candidates`] (which effects could be missing, with physical names and ready expressions;
+//! what one is, `hypothesis`, and how one with a parameter is built, [`families`]),
 //! [`dynamics`] (through how many lags, and which, the residual responds to each input),
 //! [`compose`] (the language's functions composed over every input, for effects no family lists),
 //! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual, against
 //! the base model `base` prepares once from the columns and transform of `design`),
 //! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`confirm`] (the
 //! leading candidates refitted by the trainer), [`placebo`] (each against its own columns shifted
-//! in time, under AR(1) noise), [`verdict`] (the stated criterion: a missing effect, "cannot tell"
+//! in time, under AR(1) noise; what both found, `findings`), [`verdict`] (the stated criterion: a missing effect, "cannot tell"
 //! or none). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
 //! in the tool (`host-tools/src/render/`, `host-tools/src/demo/`): this crate analyses, it does not
 //! print, and it needs no simulator.
@@ -33,6 +34,8 @@ mod design;
 pub mod dynamics;
 pub mod error;
 pub mod families;
+mod findings;
+mod hypothesis;
 pub mod joint;
 pub mod param;
 pub mod placebo;

@@ -194,8 +194,8 @@ pub fn estimate(
         "{what} by the maximum of the refits' log evidence on the training run ({} refits); \
          values within {FLAT_NATS} nats: {} … {}{}",
         seen.len(),
-        crate::candidates::num(two_significant(interval[0])),
-        crate::candidates::num(two_significant(interval[1])),
+        crate::hypothesis::num(two_significant(interval[0])),
+        crate::hypothesis::num(two_significant(interval[1])),
         if bounded {
             ""
         } else {
@@ -213,8 +213,8 @@ pub fn estimate(
         note = format!(
             "the training run's evidence is flat in {what} (within {FLAT_NATS} nats from {} to {}): \
              the language's default, which it does not reject; {} would resolve it",
-            crate::candidates::num(two_significant(interval[0])),
-            crate::candidates::num(two_significant(interval[1])),
+            crate::hypothesis::num(two_significant(interval[0])),
+            crate::hypothesis::num(two_significant(interval[1])),
             search.template.resolving_profile()
         );
     } else if flat {
@@ -234,8 +234,8 @@ pub fn estimate(
                 "the training run's evidence is flat in {what} (within {FLAT_NATS} nats from {} to \
                  {}): chosen by cross-validation over contiguous blocks of the training run; {} \
                  would resolve it",
-                crate::candidates::num(two_significant(interval[0])),
-                crate::candidates::num(two_significant(interval[1])),
+                crate::hypothesis::num(two_significant(interval[0])),
+                crate::hypothesis::num(two_significant(interval[1])),
                 search.template.resolving_profile()
             );
         }

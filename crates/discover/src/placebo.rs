@@ -58,9 +58,9 @@
 
 use crate::base::Prepared;
 use crate::candidates::Searched;
+pub use crate::findings::{Placebo, RefitPlacebos};
 use crate::score::Scored;
 use rayon::prelude::*;
-use serde::Serialize;
 use tcomp_train::ar1;
 
 /// Placebos per candidate and stage: the threshold is the largest of them, so each stage's
@@ -72,61 +72,6 @@ pub const PLACEBOS: usize = 39;
 /// best of its family, so its placebo must be too (else the search's own freedom — which τ of a
 /// lag — passes for evidence). Nine log-spaced values across the family's range.
 pub const FAMILY_GRID: usize = 9;
-
-/// One candidate against its placebos.
-#[derive(Clone, Debug, Serialize)]
-pub struct Placebo {
-    /// AR(1) coefficient of the binned noise (chosen by the base design's evidence).
-    pub rho: f64,
-    /// The candidate's Δ log evidence under that noise.
-    pub statistic: f64,
-    /// The circular shifts of its placebos (bins).
-    pub shifts_bins: Vec<usize>,
-    /// Bins of the binned training run the shifts count in.
-    pub bins: usize,
-    /// The placebos' Δ log evidence, one per shift.
-    pub placebos: Vec<f64>,
-    /// The largest placebo statistic over every candidate tested: the acceptance threshold.
-    pub threshold: f64,
-    /// The false-alarm rate the threshold holds: 1 / (placebos + 1).
-    pub level: f64,
-    /// The second stage, for a candidate with no searched parameter that fails the first: the
-    /// trainer's refits of its placebos on the training run's blocks.
-    pub refit: Option<RefitPlacebos>,
-}
-
-impl Placebo {
-    /// Whether the candidate beats every placebo, in its evidence or in its refits.
-    pub fn passes(&self) -> bool {
-        self.statistic > self.threshold || self.refit.as_ref().is_some_and(RefitPlacebos::passes)
-    }
-}
-
-/// The second stage of the test: the candidate's held-out improvement — the figure its
-/// confirmation measured, the trainer's refits predicting each block of the training run from
-/// the others — against the same figure for each placebo, its columns shifted in time and
-/// refitted the same way.
-///
-/// Why a second stage: the scoring design keeps the base model's Gaussians fixed, and some effects
-/// leave it nothing to gain in-sample — on a run with one ramp rate the Gaussians over (T, dT/dt)
-/// follow T·dT/dt on the training rows, and only a held-out ramp shows which extrapolates. Such a
-/// candidate is judged on its held-out figure, so its placebos are too. Only a candidate without
-/// a searched parameter gets it: a parameter chosen on those same blocks would make the
-/// candidate's figure optimistic against placebos that were not searched.
-#[derive(Clone, Debug, Serialize)]
-pub struct RefitPlacebos {
-    /// The candidate's held-out improvement (%) over the training run's blocks.
-    pub improvement_pct: f64,
-    /// The same for each placebo.
-    pub placebos_pct: Vec<f64>,
-}
-
-impl RefitPlacebos {
-    /// Whether the candidate's improvement beats every placebo's.
-    pub fn passes(&self) -> bool {
-        !self.placebos_pct.is_empty() && self.placebos_pct.iter().all(|p| self.improvement_pct > *p)
-    }
-}
 
 /// `v` shifted circularly by `s` places.
 fn rolled(v: &[f64], s: usize) -> Vec<f64> {

@@ -29,79 +29,15 @@
 //!   sees the lagged temperature *instead of* the thermometer's is decided by the real refits of
 //!   [`crate::confirm`], which fit the replaced feature set.
 
-pub use crate::base::{BaseFigures, Prepared, base_residual, binned_feature, prepare};
+pub use crate::base::{
+    BaseFigures, FOLDS, Prepared, ScoreOptions, base_residual, binned_feature, prepare,
+};
 use crate::candidates::{Candidate, EffectKind, Family, Search};
 use crate::design::mean_sd;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
-use tcomp_train::TrainError;
 use tcomp_train::evidence;
-use tcomp_train::options::Bound;
-
-/// The number of contiguous blocks in cross-validation on the training run: two at least (one to
-/// fit, one to predict); more than 100 leaves blocks of a few bins that say nothing.
-pub const FOLDS: Bound = Bound {
-    flag: "folds",
-    key: "",
-    min: 2.0,
-    min_exclusive: false,
-    max: 100.0,
-    unit: "",
-    why: "contiguous blocks of the training run held out in turn",
-};
-
-/// Scoring options.
-#[derive(Clone, Debug)]
-pub struct ScoreOptions {
-    /// Averaging bin before fitting (s).
-    pub bin_s: f64,
-    /// Bin of the held-out residual on a verification run (s).
-    pub heldout_bin_s: f64,
-    /// Contiguous blocks of the training run when there is no verification run.
-    pub folds: usize,
-    /// Gap threshold (s).
-    pub gap_s: Option<f64>,
-}
-
-impl Default for ScoreOptions {
-    fn default() -> Self {
-        Self {
-            bin_s: 60.0,
-            heldout_bin_s: 100.0,
-            folds: 5,
-            gap_s: None,
-        }
-    }
-}
-
-/// A bin length in seconds: positive, and under 10⁷ s (longer than any chamber run). Against the
-/// data, a bin must also hold samples; [`tcomp_train::options::check_bin`] checks that once the
-/// data are known.
-const fn bin_bound(flag: &'static str) -> Bound {
-    Bound {
-        flag,
-        key: "",
-        min: 0.0,
-        min_exclusive: true,
-        max: 1e7,
-        unit: "s",
-        why: "an averaging bin",
-    }
-}
-
-impl ScoreOptions {
-    /// Checks the bins, the folds and the gap against their valid ranges.
-    pub fn validate(&self) -> std::result::Result<(), TrainError> {
-        bin_bound("--bin").check(self.bin_s)?;
-        bin_bound("heldout_bin_s").check(self.heldout_bin_s)?;
-        FOLDS.check_count(self.folds, "")?;
-        if let Some(g) = self.gap_s {
-            tcomp_train::options::GAP.check(g)?;
-        }
-        Ok(())
-    }
-}
 
 /// One scored candidate (the best member of its family).
 #[derive(Clone, Debug, Serialize)]
@@ -130,7 +66,7 @@ pub struct Scored {
     /// The scoring's own estimate of `improvement_pct` (centers and widths of the base held fixed).
     pub scored_improvement_pct: f64,
     /// The real refit of this candidate ([`crate::confirm`]), when it was among those refitted.
-    pub confirmation: Option<crate::confirm::Confirmation>,
+    pub confirmation: Option<crate::findings::Confirmation>,
     /// Why there is no confirmation.
     pub unconfirmed: Option<String>,
     /// Std of the binned training residual with the candidate.
@@ -153,7 +89,7 @@ pub struct Scored {
     /// The scoring grid's best parameter, when the estimate moved away from it.
     pub parameter_scored: Option<f64>,
     /// The candidate against its placebos ([`crate::placebo`]), when it was refitted.
-    pub placebo: Option<crate::placebo::Placebo>,
+    pub placebo: Option<crate::findings::Placebo>,
     /// Whether it clears the criterion (set by the verdict).
     pub passes: bool,
     /// Why it does not (set by the verdict).

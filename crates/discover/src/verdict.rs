@@ -132,7 +132,7 @@ impl Criterion {
                      held-out improvement beats its placebos' refits: a false-alarm rate of at \
                      most {} % when nothing is missing",
                     self.placebos,
-                    crate::candidates::num(
+                    crate::hypothesis::num(
                         (200.0 / (self.placebos + 1) as f64 * 10.0).round() / 10.0
                     )
                 )
@@ -273,7 +273,7 @@ pub fn instruction(c: &Scored) -> String {
 /// The parameter's estimate in a few words, when it was estimated.
 fn estimate_text(c: &Scored) -> String {
     c.estimate.as_ref().map_or_else(String::new, |e| {
-        let n = |v: f64| crate::candidates::num(crate::param::two_significant(v));
+        let n = |v: f64| crate::hypothesis::num(crate::param::two_significant(v));
         format!(
             "; parameter {} ({} … {} cannot be told apart{})",
             n(e.value),

@@ -1,5 +1,6 @@
-//! No import circle among the crate's top-level modules: a helper never imports what builds on it
-//! (e.g. the fit-method trait imports no method; the registry imports the methods).
+//! No import circle among a crate's top-level modules, in the two crates that had them
+//! (`tcomp-train`, `tcomp-discover`): a helper never imports what builds on it (e.g. the
+//! fit-method trait imports no method; the registry imports the methods).
 //!
 //! The sources are scanned for `crate::x` paths (in `use` lines, grouped `crate::{x, y}` imports
 //! and inline paths; comments left out, so a doc link is no edge), each attributed to the top-level
@@ -157,10 +158,31 @@ fn the_scan_finds_a_planted_cycle() {
     assert_eq!(uses, BTreeSet::from(["a", "b", "c", "e"].map(String::from)));
 }
 
+/// The `src` folder of workspace crate `dir` (`crates/train`).
+fn src_of(dir: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(dir)
+        .join("src")
+}
+
+#[test]
+fn no_import_circle_among_the_discovery_crates_modules() {
+    let g = graph(&src_of("crates/discover"));
+    assert!(
+        g.contains_key("confirm") && g.contains_key("compose"),
+        "{g:?}"
+    );
+    assert_eq!(
+        cycle(&g),
+        None,
+        "an import circle among tcomp-discover's modules"
+    );
+}
+
 #[test]
 fn no_import_circle_among_the_top_level_modules() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let g = graph(&src);
+    let g = graph(&src_of("crates/train"));
     assert!(
         g.contains_key("method") && g.contains_key("registry"),
         "{g:?}"
