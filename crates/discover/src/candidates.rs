@@ -10,7 +10,7 @@
 //! triple of thermometers, their differences (thermal gradients), a gradient's rate, its lag and
 //! its product with the temperature; the warm-up after power-on (`warmup(τ)`, when the core's
 //! language has it); and every other numeric column (supply voltage, other channels) as a
-//! non-thermal input. A *family* is one hypothesis with a parameter (τ, threshold, rate window);
+//! non-thermal input — each kind one line of the registry [`LISTED`]. A *family* is one hypothesis with a parameter (τ, threshold, rate window);
 //! its grid members are scored individually and the family's evidence is marginalised over the
 //! grid, so searching more values does not buy evidence; [`crate::param`] then estimates the
 //! parameter of the leading families on a continuous scale ([`crate::families`] builds a member at
@@ -148,16 +148,9 @@ pub fn generate(src: &Sources, existing: &[String]) -> Vec<Family> {
     let norm = |e: &str| e.split_whitespace().collect::<String>();
     let have: Vec<String> = existing.iter().map(|e| norm(e)).collect();
     let mut out = Vec::new();
-    for t in &src.temperatures {
-        temperature_families(t, existing, &mut out);
+    for (_, generate) in LISTED {
+        generate(src, existing, &mut out);
     }
-    gradient_families(&src.thermometers, &mut out);
-    gradient_physics(src, &mut out);
-    if language_has("warmup") {
-        let (lo, hi) = WARMUP_RANGE_S;
-        out.push(Template::Warmup.family(&WARMUP_TAUS_S, lo, hi));
-    }
-    input_families(&src.inputs, &mut out);
     for f in &mut out {
         f.members.retain(|m| {
             m.expressions.iter().all(|e| !e.is_empty())
@@ -166,6 +159,33 @@ pub fn generate(src: &Sources, existing: &[String]) -> Vec<Family> {
     }
     out.retain(|f| !f.members.is_empty());
     out
+}
+
+/// A generator of listed families: from the run's sources and the model's features, appends its
+/// families.
+pub type Generator = fn(&Sources, &[String], &mut Vec<Family>);
+
+/// The registry of listed families: one line per kind of mechanism, in the order they are
+/// generated. A new kind is a function here and one line in this table; an effect the language
+/// can compose needs neither ([`crate::compose`]).
+pub const LISTED: &[(&str, Generator)] = &[
+    ("temperature", |s, e, o| {
+        for t in &s.temperatures {
+            temperature_families(t, e, o);
+        }
+    }),
+    ("gradients", |s, _, o| gradient_families(&s.thermometers, o)),
+    ("gradient physics", |s, _, o| gradient_physics(s, o)),
+    ("warm-up", |_, _, o| warmup_family(o)),
+    ("inputs", |s, _, o| input_families(&s.inputs, o)),
+];
+
+/// The warm-up after power-on, when the core's language has it.
+fn warmup_family(out: &mut Vec<Family>) {
+    if language_has("warmup") {
+        let (lo, hi) = WARMUP_RANGE_S;
+        out.push(Template::Warmup.family(&WARMUP_TAUS_S, lo, hi));
+    }
 }
 
 /// The effects of one temperature: rate (several windows; a refinement of the model's own rate
@@ -298,6 +318,25 @@ fn input_families(inputs: &[String], out: &mut Vec<Family>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_registered_generator_lists_families() {
+        let src = Sources {
+            temperatures: vec!["t_a_c".into(), "t_b_c".into()],
+            thermometers: vec!["t_a_c".into(), "t_b_c".into()],
+            inputs: vec!["supply_v".into()],
+            ..Sources::default()
+        };
+        let mut names = std::collections::HashSet::new();
+        for (name, generate) in LISTED {
+            assert!(names.insert(*name), "{name} registered twice");
+            let mut out = Vec::new();
+            generate(&src, &[], &mut out);
+            assert!(!out.is_empty(), "{name} listed nothing");
+        }
+        let all: usize = generate(&src, &[]).len();
+        assert!(all >= LISTED.len());
+    }
 
     #[test]
     fn temperatures_and_inputs_are_told_apart() {
