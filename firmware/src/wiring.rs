@@ -146,10 +146,7 @@ mod facts {
             models_origin(&read("boards/qemu/memory.x")),
             QEMU_MPS2_AN386.models_at
         );
-        assert_eq!(
-            models_origin(&read("boards/stm32f4/memory.x")),
-            STM32F407.models_at
-        );
+        assert_eq!(models_origin(&read("../memory.x")), STM32F407.models_at);
         for (layout, target) in [(QEMU_LAYOUT, QEMU_MPS2_AN386), (STM32F4_LAYOUT, STM32F407)] {
             assert_eq!((layout.a, layout.size), (0, target.slot_bytes));
             assert_eq!(layout.b, target.slot_bytes);

@@ -312,13 +312,13 @@ fn readme_number(cell: &str) -> u64 {
     if cell.contains("KiB") { v * 1024 } else { v }
 }
 
-/// The STM32F407 board's `memory.x` is what its Rust code and the firmware's slot layout assume
+/// The STM32F407 board's `memory.x`, at the repository root, is what its Rust code and the firmware's slot layout assume
 /// (the flash driver's `MODELS` region, `STM32F4_LAYOUT`, the part's figures the budgets of `cargo
 /// xtask` are taken from), and
 /// what its README's memory map says.
 #[test]
 fn stm32_memory_x_is_what_the_code_assumes() {
-    const MEMORY_X: &str = "firmware/boards/stm32f4/memory.x";
+    const MEMORY_X: &str = "memory.x";
     let regions = memory_regions(&read(MEMORY_X));
     let region = |name: &str| {
         regions
@@ -359,7 +359,10 @@ fn stm32_memory_x_is_what_the_code_assumes() {
 
     // The board README's memory map.
     let readme = read("firmware/boards/stm32f4/README.md");
-    let map = section_table(&readme, "## Memory map (`memory.x`)");
+    let map = section_table(
+        &readme,
+        "## Memory map (`memory.x`, at the repository root)",
+    );
     assert_eq!(map.len(), regions.len(), "one README row per region");
     for row in map {
         let (origin, length) = region(&row[0]);
@@ -373,13 +376,59 @@ fn stm32_memory_x_is_what_the_code_assumes() {
     }
 }
 
-/// No `memory.x` at the workspace root: cargo runs rustc, and so the linker, from the workspace
-/// root, and the linker resolves cortex-m-rt's `INCLUDE memory.x` in its working directory before
-/// the search path, so a root `memory.x` would replace every board's own (the QEMU board's too).
+/// The root `memory.x` is the product board's and the one its binary links (its `build.rs` names
+/// it); the QEMU board, whose map differs, is a workspace of its own, because cargo runs the
+/// linker from the workspace root and the linker resolves cortex-m-rt's `INCLUDE memory.x` there
+/// first: a root workspace member would link the root's map whatever its own search path says.
+/// `cargo xtask board` checks the linked ELF's sections against the root's regions.
 #[test]
-fn no_memory_x_at_the_workspace_root() {
+fn the_root_memory_x_is_the_product_boards() {
+    let build = read("firmware/boards/stm32f4/build.rs");
     assert!(
-        !root().join("memory.x").exists(),
-        "a memory.x at the workspace root shadows each board's memory.x in every thumbv7em link"
+        build.contains(r#"root.join("../../../memory.x")"#),
+        "the STM32 board's build.rs links the root memory.x"
     );
+    assert!(!root().join("firmware/boards/stm32f4/memory.x").exists());
+    assert!(root().join("firmware/boards/qemu/memory.x").exists());
+    let workspace = read("Cargo.toml");
+    assert!(workspace.contains(r#"exclude = ["firmware/boards/qemu"]"#));
+    let qemu = read("firmware/boards/qemu/Cargo.toml");
+    assert!(
+        qemu.contains("\n[workspace]\n"),
+        "the QEMU board is its own workspace"
+    );
+    // Its release profile is the root's (a profile applies only in its own workspace).
+    let profile = |toml: &str| {
+        let at = toml.find("[profile.release]").expect("a release profile");
+        toml[at..]
+            .lines()
+            .skip(1)
+            .take_while(|l| !l.trim().is_empty() && !l.starts_with('['))
+            .map(str::to_owned)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(profile(&qemu), profile(&workspace));
+    // Its registry dependencies at the root's versions, where the root names them.
+    let version = |line: &str| {
+        let at = line.find('"')? + 1;
+        Some(line[at..at + line[at..].find('"')?].to_owned())
+    };
+    let section = |toml: &str, head: &str| {
+        let at = toml.find(head).expect("the section");
+        toml[at + head.len()..]
+            .lines()
+            .take_while(|l| !l.starts_with('['))
+            .filter(|l| !l.starts_with('#') && !l.contains("path ="))
+            .filter_map(|l| Some((l.split('=').next()?.trim().to_owned(), version(l)?)))
+            .collect::<Vec<_>>()
+    };
+    let roots = section(&workspace, "[workspace.dependencies]");
+    let mut compared = 0;
+    for (name, v) in section(&qemu, "[dependencies]") {
+        if let Some((_, rv)) = roots.iter().find(|(n, _)| *n == name) {
+            assert_eq!(&v, rv, "{name}: the QEMU board's version is the root's");
+            compared += 1;
+        }
+    }
+    assert!(compared >= 6, "compared {compared} dependencies");
 }

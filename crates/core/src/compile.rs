@@ -3,7 +3,7 @@
 //! Why beside the parser rather than in [`crate::program`]: the program is what a blob carries and
 //! the firmware validates and runs; compiling text is a host-side job (though it allocates nothing,
 //! so a firmware could do it too). The grammar is in `parser`, function calls — read from the
-//! language's table, [`crate::lang`] — in `call`; errors and lexical rules in [`crate::parse`].
+//! language's table, [`crate::lang`] — in `call`; errors and lexical rules in [`crate::syntax`].
 //! The builder is generic over the number type like the program: `f32` by default, `f64` for the
 //! simulator's exact truths.
 
@@ -11,8 +11,8 @@ mod call;
 mod parser;
 
 use crate::Real;
-use crate::parse::{self, ParseError, ParseErrorKind};
 use crate::program::{Program, ProgramError, Signal};
+use crate::syntax::{self, ParseError, ParseErrorKind};
 
 /// Compiles signal definitions and feature expressions into a [`Program`].
 ///
@@ -54,7 +54,7 @@ impl<'a, const N: usize, const F: usize, S: Real> ProgramBuilder<'a, N, F, S> {
             end: name.len() as u16,
             kind,
         };
-        if !parse::is_identifier(name) || parse::is_function(name) {
+        if !syntax::is_identifier(name) || syntax::is_function(name) {
             return Err(name_err(ParseErrorKind::BadName));
         }
         if self.program.signals.iter().any(|s| s.name == name) {
@@ -86,7 +86,7 @@ impl<'a, const N: usize, const F: usize, S: Real> ProgramBuilder<'a, N, F, S> {
     /// One line of a spec: `NAME = expr` defines a signal, anything else is a feature.
     /// Errors are positioned within `line`.
     pub fn line(&mut self, line: &'a str) -> Result<(), ParseError> {
-        match parse::split_definition(line) {
+        match syntax::split_definition(line) {
             Some((name, name_at, expr, expr_at)) => self.signal(name, expr).map_err(|e| {
                 let shift = if e.kind == ParseErrorKind::BadName
                     || e.kind == ParseErrorKind::DuplicateSignal

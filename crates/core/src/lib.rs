@@ -6,7 +6,7 @@
 //! * [`program`] — feature programs: a small expression language over named input columns
 //!   (`T = mean(t_anode_c, t_shell_c)`, `rate(T)`, `T * rate(T)`, `lag(T, 2400)`, …), defined once
 //!   in the operator table of [`lang`], compiled by [`compile`] (errors and lexical rules in
-//!   [`parse`]) into a fixed-capacity list of operations, and [`stream`] runs it sample by sample
+//!   [`syntax`]) into a fixed-capacity list of operations, and [`stream`] runs it sample by sample
 //!   with bounded state, each operation evaluated by its function in [`eval`]. The trainer computes
 //!   its training features by running exactly this code over the CSV; programs, compiler and
 //!   evaluator are generic over the number type ([`Real`]: f32 on the board, f64 for the
@@ -47,13 +47,13 @@ pub mod frame;
 pub mod framer;
 pub mod image;
 pub mod lang;
-pub mod parse;
 pub mod point;
 pub mod program;
 pub mod rbf;
 mod real;
 pub mod slots;
 pub mod stream;
+pub mod syntax;
 mod tag;
 pub mod testing;
 pub mod update;
@@ -62,11 +62,11 @@ pub mod vocab;
 pub use blob::{BlobError, ColumnRoles, FeatureRange, Meta, Model, ResidualLevel, SensorKind};
 pub use compensator::{Channel, Output, Status};
 pub use compile::ProgramBuilder;
-pub use parse::{ParseError, ParseErrorKind};
 pub use program::{Op, Program, ProgramError};
 pub use rbf::{Center, Rbf};
 pub use real::Real;
 pub use stream::{ProgramState, StepError};
+pub use syntax::{ParseError, ParseErrorKind};
 pub use vocab::EffectKind;
 
 /// Host-side default capacity: centers per model.

@@ -98,9 +98,9 @@ fn arity_and_names_come_from_the_table() {
             let wrong = r.as_ref().err().map(|e| e.kind) == Some(ParseErrorKind::WrongArgCount);
             assert_eq!(wrong, !f.admits_arg_count(n + 1), "{text}: {r:?}");
         }
-        assert!(tcomp_core::parse::is_function(f.name));
+        assert!(tcomp_core::syntax::is_function(f.name));
     }
-    assert!(!tcomp_core::parse::is_function("exp"));
+    assert!(!tcomp_core::syntax::is_function("exp"));
 }
 
 #[test]

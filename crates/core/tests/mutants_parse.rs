@@ -1,10 +1,10 @@
 //! The parser's promises that the operator tests do not reach: constant folding (values, and that a
 //! folded constant costs one node and never eats a signal's node), the nesting limit and its
 //! position, identifiers, and a message for every kind of error.
-//! Written to kill what `cargo mutants` found untested in `parse.rs`.
+//! Written to kill what `cargo mutants` found untested in `syntax.rs` (the parser itself is `compile/parser.rs`).
 #![allow(clippy::unwrap_used, missing_docs)]
 
-use tcomp_core::parse::{is_function, is_identifier, split_definition};
+use tcomp_core::syntax::{is_function, is_identifier, split_definition};
 use tcomp_core::{Op, ParseError, ParseErrorKind as K, ProgramBuilder, ProgramState};
 
 type B<'a> = ProgramBuilder<'a, 48, 8>;
@@ -367,12 +367,12 @@ fn log_column_names_are_inputs() {
         "sensor_accel[2].temperature",
         "sensor_combined.gyro_rad[0]",
     ] {
-        assert!(tcomp_core::parse::is_column_name(ok), "{ok}");
+        assert!(tcomp_core::syntax::is_column_name(ok), "{ok}");
     }
     for bad in [
         "", "IMU.", "IMU[]", "IMU[1", "IMU[a].T", ".T", "IMU..T", "IMU.1x", "a b",
     ] {
-        assert!(!tcomp_core::parse::is_column_name(bad), "{bad:?}");
+        assert!(!tcomp_core::syntax::is_column_name(bad), "{bad:?}");
     }
     let mut b = ProgramBuilder::<'static, 16, 4>::new();
     b.feature("rate(IMU[1].T)").unwrap();

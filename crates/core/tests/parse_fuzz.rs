@@ -15,7 +15,7 @@ use tcomp_core::{MAX_STATEFUL, ParseErrorKind as K, ProgramBuilder, ProgramState
 
 /// Cases per fuzz property in the normal `cargo test` run.
 const FUZZ_CASES: u32 = 100_000;
-/// The parser's nesting limit (`MAX_DEPTH` in `parse.rs`).
+/// The parser's nesting limit (`MAX_DEPTH` in `compile/parser.rs`).
 const MAX_DEPTH: usize = 24;
 /// Program capacity used by the structured cases: the largest a program may have.
 const NODES: usize = 255;

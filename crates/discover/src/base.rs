@@ -11,7 +11,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use tcomp_train::bayes::{self, BayesOptions};
 use tcomp_train::binning::{bin_mean, bins};
-use tcomp_train::dataset::segments;
+use tcomp_train::dataset::stretch_starts;
 use tcomp_train::evidence::{self, GroupFit};
 use tcomp_train::features::FeatureSpec;
 use tcomp_train::options::Bound;
@@ -152,7 +152,7 @@ pub fn prepare(
 ) -> Result<Prepared> {
     let time = data.time(&roles.time)?;
     let opts = &adapted_bins(opts, time, verify, roles)?;
-    let starts = segments(time, opts.gap_s);
+    let starts = stretch_starts(time, opts.gap_s);
     let tbins = bins(time, opts.bin_s);
     let err = error_of(data, roles)?;
     let yb = bin_mean(&err, &tbins);
@@ -263,7 +263,7 @@ fn held_out(
     Ok(match verify {
         Some(v) => {
             let vt = v.time(&roles.time)?;
-            let vstarts = segments(vt, opts.gap_s);
+            let vstarts = stretch_starts(vt, opts.gap_s);
             let vb = bins(vt, opts.heldout_bin_s);
             let vy = bin_mean(&error_of(v, roles)?, &vb);
             let vcols =

@@ -18,14 +18,14 @@
 //!
 //! Every expression is written with the names the user's program has (the model's signals as the
 //! user defined them and the file's columns), never a signal the trainer added to the stored
-//! program (see [`crate::program`]), so each one is accepted by `tcomp fit --feature` as printed.
+//! program (see [`crate::user_program`]), so each one is accepted by `tcomp fit --feature` as printed.
 //! A candidate that only re-states a feature the model has (its rate with another window) is
 //! marked as a refinement of that feature ([`Candidate::refines`]), not a missing effect.
 
 use crate::families::{Template, existing_rate, kind_named, language_has};
-use crate::program;
+use crate::user_program;
 use tcomp_core::expr::{self, Expr};
-use tcomp_core::parse::is_column_name;
+use tcomp_core::syntax::is_column_name;
 use tcomp_train::Dataset;
 
 pub use crate::families::{Family, Search};
@@ -143,7 +143,7 @@ fn single(kind: EffectKind, effect: String, exprs: Vec<Expr>) -> Family {
 }
 
 /// Every candidate family for these sources, minus expressions the model already has; `existing`
-/// are the model's features (as the user wrote them: see [`crate::program::user_spec`]).
+/// are the model's features (as the user wrote them: see [`crate::user_program::user_spec`]).
 pub fn generate(src: &Sources, existing: &[String]) -> Vec<Family> {
     let norm = |e: &str| e.split_whitespace().collect::<String>();
     let have: Vec<String> = existing.iter().map(|e| norm(e)).collect();
@@ -216,7 +216,7 @@ fn temperature_families(t: &str, existing: &[String], out: &mut Vec<Family>) {
     ));
     let (lo, hi) = LAG_RANGE_S;
     out.push(Template::Lag { of: t.to_string() }.family(&LAG_TAUS_S, lo, hi));
-    if existing.iter().any(|f| program::uses(f, t)) {
+    if existing.iter().any(|f| user_program::uses(f, t)) {
         let replacing = Template::LagReplacing {
             name: t.to_string(),
             features: existing.to_vec(),

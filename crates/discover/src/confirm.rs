@@ -282,7 +282,7 @@ fn motion(
     let Ok(program) = spec.program() else {
         return all;
     };
-    let starts = tcomp_train::dataset::segments(time, gap_s);
+    let starts = tcomp_train::dataset::stretch_starts(time, gap_s);
     let Ok(rows) = tcomp_train::features::compute(&program, data, time, &starts) else {
         return all;
     };
@@ -559,7 +559,7 @@ pub(crate) fn refit_placebos(
     };
     let program = spec.program().ok()?;
     let time = data.time(&roles.time).ok()?;
-    let starts = tcomp_train::dataset::segments(time, gap_s);
+    let starts = tcomp_train::dataset::stretch_starts(time, gap_s);
     let rows = tcomp_train::features::compute(&program, data, time, &starts).ok()?;
     let n = rows.len();
     if n == 0 {

@@ -9,7 +9,7 @@
 //! printed by its one printer.
 
 use crate::hypothesis::{Candidate, EffectKind, Searched, num};
-use crate::program;
+use crate::user_program;
 use serde::Serialize;
 use tcomp_core::expr::{self, Expr};
 
@@ -158,7 +158,7 @@ impl Template {
                 let by = expr::lag(expr::name(name), p);
                 let replaces: Vec<String> = features
                     .iter()
-                    .filter(|f| program::uses(f, name))
+                    .filter(|f| user_program::uses(f, name))
                     .cloned()
                     .collect();
                 Candidate {
@@ -169,7 +169,7 @@ impl Template {
                     ),
                     expressions: replaces
                         .iter()
-                        .map(|f| program::replace(f, name, &by))
+                        .map(|f| user_program::replace(f, name, &by))
                         .collect(),
                     parameter: Some(p),
                     replaces,

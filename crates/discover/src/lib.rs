@@ -39,11 +39,11 @@ mod hypothesis;
 pub mod joint;
 pub mod param;
 pub mod placebo;
-pub mod program;
 pub mod rounds;
 pub mod score;
 pub mod segments;
 mod surrogate;
+pub mod user_program;
 pub mod verdict;
 
 pub use error::{DiscoverError, Result};
@@ -70,11 +70,11 @@ pub struct ModelInfo {
     pub unit: String,
 }
 
-/// The source of a model's program as the user wrote it (see [`program::user_spec`]) and its
+/// The source of a model's program as the user wrote it (see [`user_program::user_spec`]) and its
 /// roles.
 pub fn model_info(model: &HostModel<'_>) -> ModelInfo {
     ModelInfo {
-        spec: program::user_spec(&FeatureSpec {
+        spec: user_program::user_spec(&FeatureSpec {
             signals: model
                 .program
                 .signals

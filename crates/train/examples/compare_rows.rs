@@ -13,7 +13,7 @@
 
 use std::path::Path;
 use std::time::Instant;
-use tcomp_train::dataset::segments;
+use tcomp_train::dataset::stretch_starts;
 use tcomp_train::{Dataset, FitOptions, Roles, blob_io, evaluate, features, fit};
 
 #[path = "../benches/support/rlg_case.rs"]
@@ -22,7 +22,7 @@ mod rlg_case;
 fn write_rows(data: &Dataset, opts: &FitOptions, path: &Path) {
     let program = opts.spec.program().unwrap();
     let time = data.time("time_s").unwrap();
-    let rows = features::compute(&program, data, time, &segments(time, None)).unwrap();
+    let rows = features::compute(&program, data, time, &stretch_starts(time, None)).unwrap();
     let gyro = data.column("gyro_dph").unwrap();
     let reference = data.column("ref_dph").unwrap();
     let mut w = csv::Writer::from_path(path).unwrap();

@@ -504,10 +504,10 @@ pub fn closest(name: &str, names: &[String]) -> Option<String> {
         .map(|(_, n)| n.clone())
 }
 
-/// Row indices where a new contiguous segment starts (always including 0): a step longer than
+/// Row indices where a gap-free stretch of the run starts (always including 0): a step longer than
 /// `max(gap_s, 10 × median step)` is a gap, which the feature state is carried across (see
 /// [`crate::features`]).
-pub fn segments(time: &[f64], gap_s: Option<f64>) -> Vec<usize> {
+pub fn stretch_starts(time: &[f64], gap_s: Option<f64>) -> Vec<usize> {
     let mut starts = vec![0];
     if time.len() < 2 {
         return starts;

@@ -104,15 +104,15 @@ pub fn time_on_s(time: &[f64], power_on_s: Option<f64>) -> Result<f64, TrainErro
     }
 }
 
-/// The gaps among `segment_starts` (row indices where a segment starts, 0 first) across which
+/// The gaps among `stretch_starts` (row indices where a gap-free stretch starts, 0 first) across which
 /// `program`'s filters restart rather than carry on, as `(row, gap length s)`: longer than 5× its
 /// longest time constant (the core's [`gap_resets`]).
 pub fn restarting_gaps<const N2: usize, const F2: usize>(
     program: &Program<'_, N2, F2>,
     time: &[f64],
-    segment_starts: &[usize],
+    stretch_starts: &[usize],
 ) -> Vec<(usize, f64)> {
-    segment_starts
+    stretch_starts
         .iter()
         .filter(|&&s| s > 0)
         .filter_map(|&s| {
@@ -122,16 +122,16 @@ pub fn restarting_gaps<const N2: usize, const F2: usize>(
         .collect()
 }
 
-/// Runs `program` over every row of `data` (f32, the core's code), each entry of `segment_starts`
+/// Runs `program` over every row of `data` (f32, the core's code), each entry of `stretch_starts`
 /// but the first a gap the core carries the state across (see the module doc), `warmup`'s clock
 /// starting at the first row; returns one feature vector per row.
 pub fn compute(
     program: &Program<'_, N, F>,
     data: &Dataset,
     time: &[f64],
-    segment_starts: &[usize],
+    stretch_starts: &[usize],
 ) -> Result<Vec<[f32; F]>, TrainError> {
-    compute_from(program, data, time, segment_starts, 0.0)
+    compute_from(program, data, time, stretch_starts, 0.0)
 }
 
 /// [`compute`] with `warmup`'s clock starting at `time_on_s` seconds since power-on on the first
@@ -140,7 +140,7 @@ pub fn compute_from(
     program: &Program<'_, N, F>,
     data: &Dataset,
     time: &[f64],
-    segment_starts: &[usize],
+    stretch_starts: &[usize],
     time_on_s: f64,
 ) -> Result<Vec<[f32; F]>, TrainError> {
     let cols = input_columns(program, data)?;
@@ -148,11 +148,11 @@ pub fn compute_from(
     state.set_time_on(time_on_s as f32);
     let mut inputs = vec![0.0f32; cols.len()];
     let mut out = Vec::with_capacity(time.len());
-    let mut next_seg = segment_starts.iter().peekable();
+    let mut next_stretch = stretch_starts.iter().peekable();
     for i in 0..time.len() {
-        let gap = next_seg.peek().is_some_and(|&&s| s == i);
+        let gap = next_stretch.peek().is_some_and(|&&s| s == i);
         if gap {
-            next_seg.next();
+            next_stretch.next();
         }
         for (v, c) in inputs.iter_mut().zip(&cols) {
             *v = c.get(i).copied().unwrap_or(f64::NAN) as f32;

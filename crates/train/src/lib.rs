@@ -42,6 +42,7 @@ mod fit_options;
 pub mod gradient;
 mod kmeans;
 pub mod layer;
+pub mod long_log;
 pub mod method;
 pub mod metrics;
 pub mod mse;
@@ -55,15 +56,14 @@ pub mod rbf64;
 pub mod registry;
 mod rows;
 pub mod spec;
-pub mod stream;
 pub mod train;
 pub mod units;
 
 pub use dataset::{DataError, Dataset};
 pub use error::TrainError;
+pub use long_log::{StreamOptions, eval_stream, eval_stream_reader};
 pub use metrics::{EvalReport, Roles};
 pub use spec::{ChannelOptions, FeatureOptions, MethodOptions, RunOptions, Spec};
-pub use stream::{StreamOptions, eval_stream, eval_stream_reader};
 pub use train::{
     FitOptions, FitSummary, Fitted, Method, MethodSettings, evaluate, fit, fit_unmeasured,
     fit_with_progress,

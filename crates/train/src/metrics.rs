@@ -8,7 +8,7 @@
 //! alike, because bias instability makes 1 Hz samples strongly correlated), and a per-segment table of
 //! holds, heating and cooling ramps detected from the temperature rate.
 
-use crate::dataset::{Dataset, segments};
+use crate::dataset::{Dataset, stretch_starts};
 
 pub mod online;
 pub(crate) mod step;
@@ -215,7 +215,7 @@ fn run_until<const C2: usize, const F2: usize, const N2: usize>(
         Some(n) => data.column(n)?.to_vec(),
         None => vec![0.0; data.len()],
     };
-    let starts = segments(time, gap_s);
+    let starts = stretch_starts(time, gap_s);
     let mut stepper = step::Stepper::new(model);
     stepper.set_time_on(crate::features::time_on_s(time, roles.power_on_s)? as f32);
     let mut inputs = vec![0.0f32; cols.len()];

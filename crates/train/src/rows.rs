@@ -7,7 +7,7 @@
 //! and benchmarks reach it alone through [`training_rows`].
 
 use crate::binning::{adaptive_bin, bin_mean, bins};
-use crate::dataset::{DataError, Dataset, segments};
+use crate::dataset::{DataError, Dataset, stretch_starts};
 use crate::error::TrainError;
 use crate::features::{self, FeatureSpec};
 use crate::fit_options::FitOptions;
@@ -245,7 +245,7 @@ pub(crate) fn prepare(
         mut warnings,
     } = select(data, opts)?;
     let time = data.time(&opts.time)?;
-    let starts = segments(time, opts.gap_s);
+    let starts = stretch_starts(time, opts.gap_s);
     let time_on_s = features::time_on_s(time, opts.power_on_s)?;
     check_options(opts, method)?;
     let average_s = averaging(opts, &data, time)?;

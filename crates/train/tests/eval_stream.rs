@@ -10,7 +10,7 @@ use tcomp_sim::dropout::RandomDropouts;
 use tcomp_sim::{Scenario, presets, simulate};
 use tcomp_train::{
     Dataset, FitOptions, Method, Roles, StreamOptions, blob_io, eval_stream, eval_stream_reader,
-    fit, stream::streamed_only,
+    fit, long_log::streamed_only,
 };
 
 fn csv_text(names: &[String], cols: &[Vec<f64>]) -> Vec<u8> {
@@ -309,7 +309,7 @@ fn a_jittery_clock_with_more_distinct_steps_than_counted() {
     let mut state = 99u64;
     let mut csv = b"time_s,t_anode_c,t_cathode_c,t_shell_c,gyro_dph,ref_dph\n".to_vec();
     let rows = 80_000;
-    assert!(rows > tcomp_train::stream::steps::MAX_DISTINCT);
+    assert!(rows > tcomp_train::long_log::steps::MAX_DISTINCT);
     let mut dropout = 0.0;
     for i in 0..rows {
         state = state

@@ -85,7 +85,7 @@ fn a_clock_restart_continues_after_a_gap() {
     assert_eq!(t[49], 49.0);
     assert_eq!(t[50] - t[49], 20.0, "a gap of 20 median steps");
     assert_eq!(t[99] - t[50], 49.0);
-    let starts = tcomp_train::dataset::segments(t, None);
+    let starts = tcomp_train::dataset::stretch_starts(t, None);
     assert_eq!(starts, [0, 50]);
     let note = d.notes().join(" ");
     assert!(

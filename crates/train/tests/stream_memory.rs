@@ -74,7 +74,7 @@ fn streaming_memory_does_not_grow_with_the_length() {
     let (rl, pl) = stream(&long);
     assert_eq!((rs.samples, rl.samples), (20_000, 200_000));
     assert!(
-        tcomp_train::stream::streamed_only(Cursor::new(&long), false, &model, &opts).is_some(),
+        tcomp_train::long_log::streamed_only(Cursor::new(&long), false, &model, &opts).is_some(),
         "the long log is streamed, not loaded"
     );
     println!("peak heap while streaming: 20,000 rows {ps} B, 200,000 rows {pl} B");

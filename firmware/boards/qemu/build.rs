@@ -1,6 +1,6 @@
-//! Links the QEMU board's binaries with this crate's `memory.x` (mps2-an386), `device.x` (its
-//! interrupt vectors, for cortex-m-rt's `device` feature), cortex-m-rt's `link.x` and defmt's
-//! `defmt.x`, and writes the smoke run's test vector.
+//! Links the QEMU board's binaries with this crate's `memory.x` (mps2-an386; the repository root's
+//! is the STM32F407's), `device.x` (its interrupt vectors, for cortex-m-rt's `device` feature),
+//! cortex-m-rt's `link.x` and defmt's `defmt.x`, and writes the smoke run's test vector.
 //!
 //! The vector is made here, on the host, by the same `tcomp-core` code the firmware runs: the blob
 //! of an example RLG model (32 centers × 4 features) and, for each of a few hundred samples, the
@@ -26,7 +26,9 @@ fn main() {
         fs::copy(root.join(file), out.join(file)).expect("copy the linker scripts");
         println!("cargo:rerun-if-changed={file}");
     }
-    // For this crate's binaries only: the first `memory.x` on the linker's search path wins.
+    // For this crate's binaries only. The linker reads `memory.x` from its working directory first:
+    // this crate is a workspace of its own so that it is this directory, not the repository
+    // root, whose `memory.x` is the STM32F407's (see Cargo.toml).
     println!("cargo:rustc-link-arg-bins=-L{}", out.display());
     println!("cargo:rerun-if-changed=build.rs");
     if env::var("TARGET").is_ok_and(|t| t.starts_with("thumb")) {

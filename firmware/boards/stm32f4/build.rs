@@ -1,7 +1,12 @@
-//! Links the board binary with this crate's `memory.x` (the STM32F407's map, not the QEMU board's in
-//! `firmware/`), cortex-m-rt's `link.x` and defmt's `defmt.x`, and selects the board description
-//! the binary runs: `TCOMP_BOARD` names a file of `firmware/descriptions/` (default `imu6-rlg-qma`),
-//! whose channel table `tcomp_firmware::wiring` generated.
+//! Links the board binary with the repository root's `memory.x` (the STM32F407's map: the product
+//! board's, where the project's layout puts it; the QEMU board, a workspace of its own, keeps its
+//! own beside its code), cortex-m-rt's `link.x` and defmt's `defmt.x`, and selects the board
+//! description the binary runs: `TCOMP_BOARD` names a file of `firmware/descriptions/` (default
+//! `imu6-rlg-qma`), whose channel table `tcomp_firmware::wiring` generated.
+//!
+//! The linker would find the root's `memory.x` unaided (cargo runs it from the workspace root,
+//! and it resolves `INCLUDE memory.x` there first); it is also put on the search path from here so
+//! that the build reruns when it changes, and the link finds it wherever the linker runs.
 
 use std::{env, error::Error, fs, path::PathBuf};
 
@@ -9,7 +14,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let out = PathBuf::from(env::var_os("OUT_DIR").ok_or("cargo sets OUT_DIR")?);
     let root =
         PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").ok_or("cargo sets CARGO_MANIFEST_DIR")?);
-    let memory_x = root.join("memory.x");
+    let memory_x = root.join("../../../memory.x");
     fs::copy(&memory_x, out.join("memory.x"))?;
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed={}", memory_x.display());

@@ -1,4 +1,5 @@
-//! Section sizes of a 32-bit little-endian ELF file (what `size -A` prints), without a tool.
+//! Section sizes and addresses of a 32-bit little-endian ELF file (what `size -A` prints), without
+//! a tool.
 
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -33,6 +34,14 @@ pub fn flash_and_static_ram(path: &Path) -> Result<(u64, u64)> {
 
 /// `(name, size)` of every section.
 pub fn sections(path: &Path) -> Result<Vec<(String, u64)>> {
+    Ok(placed(path)?
+        .into_iter()
+        .map(|(name, _, size)| (name, size))
+        .collect())
+}
+
+/// `(name, address, size)` of every section.
+pub fn placed(path: &Path) -> Result<Vec<(String, u64, u64)>> {
     let b = std::fs::read(path).with_context(|| format!("{}", path.display()))?;
     let bad = || anyhow::anyhow!("{} is not a 32-bit ELF file", path.display());
     if b.get(..5) != Some(&b"\x7fELF\x01"[..]) {
@@ -49,8 +58,13 @@ pub fn sections(path: &Path) -> Result<Vec<(String, u64)>> {
             let name_at = strtab + u32_at(&b, header(i)).ok_or_else(bad)? as usize;
             let name = b.get(name_at..).ok_or_else(bad)?;
             let end = name.iter().position(|&c| c == 0).unwrap_or(0);
+            let addr = u32_at(&b, header(i) + 0x0C).ok_or_else(bad)?;
             let size = u32_at(&b, header(i) + 0x14).ok_or_else(bad)?;
-            Ok((String::from_utf8_lossy(&name[..end]).into_owned(), size))
+            Ok((
+                String::from_utf8_lossy(&name[..end]).into_owned(),
+                addr,
+                size,
+            ))
         })
         .collect()
 }

@@ -54,14 +54,9 @@ fn main() -> Result<()> {
 /// The longest a cargo command of the xtask may take: the workspace's test build from nothing
 /// takes about 10 min on the 2-core machine while other builds run; CI's own limit is 90 min.
 const CARGO_LIMIT: Duration = proc::minutes(40);
-/// The host test set: the workspace less the board crates (target-only binaries).
-pub const HOST_TESTS: [&str; 5] = [
-    "--workspace",
-    "--exclude",
-    board::PACKAGE,
-    "--exclude",
-    qemu::QEMU_BOARD,
-];
+/// The host test set: the workspace less the STM32 board crate (a target-only binary; the QEMU
+/// board is a workspace of its own).
+pub const HOST_TESTS: [&str; 3] = ["--workspace", "--exclude", board::PACKAGE];
 /// The QEMU smoke run: about 1 s.
 const SMOKE_LIMIT: Duration = proc::minutes(2);
 
@@ -107,12 +102,19 @@ fn lint() -> Result<()> {
     lint_steps(&mut Steps(Vec::new()))
 }
 
-/// Formatting and clippy, host and target. The target's clippy (the firmware crates and both
-/// boards' binaries for thumbv7em, the STM32F4 PAC among them) shares no artifact with the host's
+/// Formatting and clippy, host and target. The target's clippy (the firmware crates and the STM32
+/// board's binary for thumbv7em, the STM32F4 PAC among them; then the QEMU board's, a workspace
+/// of its own) shares no artifact with the host's
 /// but a few proc-macros, so it runs beside it, in its own target directory (cargo's lock on one
 /// directory would serialise the two): the host check leaves a core idle much of the time.
 fn lint_steps(steps: &mut Steps) -> Result<()> {
-    steps.run("fmt", || cargo(&["fmt", "--all", "--", "--check"]))?;
+    let qemu_board = qemu::board_args();
+    let qemu_board: Vec<&str> = qemu_board.iter().map(String::as_str).collect();
+    steps.run("fmt", || {
+        cargo(&["fmt", "--all", "--", "--check"])?;
+        // The QEMU board is a workspace of its own: `--all` is the root's members.
+        cargo(&[&["fmt"][..], &qemu_board[..2], &["--", "--check"]].concat())
+    })?;
     let mut clippy_target = Command::new(env!("CARGO"));
     clippy_target
         .args([
@@ -123,8 +125,6 @@ fn lint_steps(steps: &mut Steps) -> Result<()> {
             "tcomp-hal",
             "-p",
             "tcomp-firmware",
-            "-p",
-            qemu::QEMU_BOARD,
             "-p",
             board::PACKAGE,
             "--target",
@@ -147,7 +147,29 @@ fn lint_steps(steps: &mut Steps) -> Result<()> {
             .concat(),
         )
     })?;
-    steps.run("clippy_target", || target.finish())
+    steps.run("clippy_target", || target.finish())?;
+    // The QEMU board, a workspace of its own, after the lane (its dependencies' checks are the
+    // lane's, in the same target directory).
+    steps.run("clippy_qemu_board", || {
+        let dir = qemu::target_dir().join("clippy-target");
+        let dir = dir.display().to_string();
+        cargo(
+            &[
+                &["clippy"][..],
+                &qemu_board[..2],
+                &[
+                    "--target-dir",
+                    &dir,
+                    "--target",
+                    TARGET,
+                    "--",
+                    "-D",
+                    "warnings",
+                ],
+            ]
+            .concat(),
+        )
+    })
 }
 
 fn ci() -> Result<()> {
@@ -297,16 +319,16 @@ fn has_kind(message: &serde_json::Value, kind: &str) -> bool {
 /// by [`SMOKE_LIMIT`]), echoes its output, and checks its verdict, QEMU's exit code and the
 /// instruction budget.
 fn smoke() -> Result<()> {
-    cargo(&[
-        "build",
-        "-p",
-        qemu::QEMU_BOARD,
-        "--target",
-        TARGET,
-        "--release",
-        "--bin",
-        "smoke",
-    ])?;
+    let board = qemu::board_args();
+    let board: Vec<&str> = board.iter().map(String::as_str).collect();
+    cargo(
+        &[
+            &["build"][..],
+            &board,
+            &["--target", TARGET, "--release", "--bin", "smoke"],
+        ]
+        .concat(),
+    )?;
     let elf = qemu::target_dir().join(TARGET).join("release/smoke");
     // One instruction per ns of virtual time (the runner of `.cargo/config.toml` uses the same).
     let mut qemu = qemu::machine(&elf, "shift=0");

@@ -31,10 +31,28 @@ const TCOMP_LIMIT: Duration = proc::minutes(3);
 /// One QEMU replay: 10,000 samples (50 s of guest time) take about 6 s on the 2-core machine.
 pub const QEMU_LIMIT: Duration = proc::minutes(5);
 
-/// The QEMU board's crate and the binary that binds the application to it.
-pub const QEMU_BOARD: &str = "tcomp-board-qemu";
+/// The QEMU board's crate (a workspace of its own: see [`board_args`]) and the binary that binds
+/// the application to it.
+pub const QEMU_BOARD: &str = "firmware/boards/qemu";
 /// See [`QEMU_BOARD`].
 pub const QEMU_BIN: &str = "tcomp-qemu";
+
+/// The arguments that make a cargo command act on the QEMU board: its manifest, and the
+/// workspace's target directory. The board is a workspace of its own (its `Cargo.toml` says why:
+/// the root's `memory.x` is the STM32F407's, and the linker reads `memory.x` from the directory
+/// cargo runs it in, the workspace root, first), so `-p` from the root does not reach it.
+pub fn board_args() -> Vec<String> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    vec![
+        "--manifest-path".into(),
+        root.join(QEMU_BOARD)
+            .join("Cargo.toml")
+            .display()
+            .to_string(),
+        "--target-dir".into(),
+        target_dir().display().to_string(),
+    ]
+}
 
 /// The workspace's target directory (`CARGO_TARGET_DIR` or `target/`).
 pub fn target_dir() -> PathBuf {
@@ -234,16 +252,16 @@ pub fn qemu() -> Result<()> {
     let target_dir = target_dir();
     let work = target_dir.join("qemu-replay");
     std::fs::create_dir_all(&work)?;
-    cargo(&[
-        "build",
-        "-p",
-        QEMU_BOARD,
-        "--target",
-        TARGET,
-        "--release",
-        "--bin",
-        QEMU_BIN,
-    ])?;
+    let board = board_args();
+    let board: Vec<&str> = board.iter().map(String::as_str).collect();
+    cargo(
+        &[
+            &["build"][..],
+            &board,
+            &["--target", TARGET, "--release", "--bin", QEMU_BIN],
+        ]
+        .concat(),
+    )?;
     let elf = target_dir.join(TARGET).join("release").join(QEMU_BIN);
     // The host CLI makes the models and vectors; build it so `cargo xtask qemu` stands alone
     // (in CI the test step built it already: see `host_build`).

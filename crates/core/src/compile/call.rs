@@ -4,8 +4,8 @@
 
 use super::parser::Parser;
 use crate::lang::{self, Domain, Function, MAX_PARAMS};
-use crate::parse::{ParseError, ParseErrorKind};
 use crate::program::Op;
+use crate::syntax::{ParseError, ParseErrorKind};
 use crate::{MAX_STATEFUL, Real};
 
 /// Most arguments a call may have (`mean` of many columns).

@@ -1,4 +1,4 @@
-//! The recursive-descent grammar of [`crate::parse`], emitting nodes into a [`ProgramBuilder`] as
+//! The recursive-descent grammar of [`crate::syntax`], emitting nodes into a [`ProgramBuilder`] as
 //! it goes. Constant sub-expressions are folded, so `-2 * 3` costs no node. A division by a constant
 //! zero (`T / 0`, `T / (2 - 2)`, or by a signal defined as `0`) is refused here, pointing at the
 //! divisor, rather than giving a feature that is NaN or infinite on every sample. Nesting
@@ -7,8 +7,8 @@
 
 use super::ProgramBuilder;
 use crate::Real;
-use crate::parse::{ParseError, ParseErrorKind};
 use crate::program::{Op, Signal};
+use crate::syntax::{ParseError, ParseErrorKind};
 
 const MAX_DEPTH: u8 = 24;
 
@@ -262,7 +262,7 @@ impl<'a, const N: usize, const F: usize, S: Real> Parser<'a, '_, N, F, S> {
     }
 
     /// The rest of a column name read from an autopilot log: `.field` and `[instance]` parts after
-    /// the first identifier (`sensor_gyro.x`, `IMU[1].GyrX`; [`crate::parse::is_column_name`]).
+    /// the first identifier (`sensor_gyro.x`, `IMU[1].GyrX`; [`crate::syntax::is_column_name`]).
     /// Nothing else in the language uses `.` after a name or `[`, so the name stays one token.
     fn column_suffix(&mut self) {
         let bytes = self.src.as_bytes();

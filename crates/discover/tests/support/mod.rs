@@ -15,7 +15,7 @@ pub use tcomp_demo::{Simulated, simulated};
 pub use tcomp_discover::score::Scored;
 pub use tcomp_discover::{DiagnoseOptions, Diagnosis, Verdict, diagnose};
 pub use tcomp_sim::{EffectKind, SensorKind, presets};
-pub use tcomp_train::dataset::segments;
+pub use tcomp_train::dataset::stretch_starts;
 pub use tcomp_train::features::{self, FeatureSpec, bin_mean, bins};
 pub use tcomp_train::metrics::{self, Roles};
 pub use tcomp_train::{Dataset, FitOptions, Fitted};
@@ -49,7 +49,7 @@ pub fn columns(
     };
     let program = spec.program().unwrap();
     let time = data.time("time_s").unwrap();
-    let rows = features::compute(&program, data, time, &segments(time, gap)).unwrap();
+    let rows = features::compute(&program, data, time, &stretch_starts(time, gap)).unwrap();
     (0..exprs.len())
         .map(|k| rows.iter().map(|r| f64::from(r[k])).collect())
         .collect()

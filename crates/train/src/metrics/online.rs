@@ -5,7 +5,7 @@
 //! needs only running moments (Welford's mean and M2, the sum of squares, the largest |value|) and
 //! a short summary per time bin (O(bins), not O(rows)): the `--bin` bins for the binned figures
 //! and 60 s bins for the holds/ramps table. Both evaluation paths — the in-memory [`super::report`]
-//! over a [`super::Run`] and the streaming [`crate::stream`] reader — feed this one accumulator in
+//! over a [`super::Run`] and the streaming [`crate::long_log`] reader — feed this one accumulator in
 //! row order, so the two cannot drift: they give the same report bit for bit.
 //!
 //! A bin closes when the time passes its end; whether it holds enough samples to count (half a

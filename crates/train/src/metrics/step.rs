@@ -1,5 +1,5 @@
 //! The one loop body that steps a model over rows: [`run_model`](super::run_model) (a
-//! [`Dataset`](crate::Dataset) in memory) and the streamed `eval` ([`crate::stream`], a CSV read
+//! [`Dataset`](crate::Dataset) in memory) and the streamed `eval` ([`crate::long_log`], a CSV read
 //! a record at a time) differ only in where their rows come from, so both take the model's
 //! flight capacity from [`in_flight_capacity`] and step it with a [`Stepper`]: the same time step,
 //! gap marking, flag counts and residual, bit for bit.

@@ -227,7 +227,7 @@ pub(super) fn candidate_plots_in(
         return candidate_plots(a, &unit);
     }
     let b = plot_bins(time);
-    let starts = tcomp_train::dataset::segments(time, view.gap_s);
+    let starts = tcomp_train::dataset::stretch_starts(time, view.gap_s);
     let residuals: Vec<(String, Vec<f64>)> = input
         .models
         .iter()

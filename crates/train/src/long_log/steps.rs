@@ -1,7 +1,7 @@
 //! The time steps of a streamed record: their exact median without holding them, and the gap
 //! decisions checked against it.
 //!
-//! Why: a gap is a step longer than `max(--gap, 10 × median step)` ([`crate::dataset::segments`]),
+//! Why: a gap is a step longer than `max(--gap, 10 × median step)` ([`crate::dataset::stretch_starts`]),
 //! and the median is a property of the whole record, known only at its end, while the compensator
 //! must be told of a gap before the sample after it. A logger's clock takes few distinct steps
 //! (a fixed rate printed to fixed decimals differs only in the last bits of the parsed time), so
@@ -220,7 +220,7 @@ mod tests {
         }
         let (median, limit, consistent) = s.finish().unwrap();
         assert_eq!(median, median_step(time));
-        let starts = crate::dataset::segments(time, Some(gap_s));
+        let starts = crate::dataset::stretch_starts(time, Some(gap_s));
         let truth: Vec<bool> = (1..time.len()).map(|i| starts.contains(&i)).collect();
         assert_eq!(consistent, decided == truth, "limit {limit}");
         let mut again = Steps::new(gap_s, Some(median));

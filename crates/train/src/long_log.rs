@@ -9,7 +9,7 @@
 //! model uses parsed at all.
 //!
 //! One definition of each thing: the figures come from the shared accumulator; gaps are the steps
-//! [`crate::dataset::segments`] calls gaps (its median step found exactly by [`steps`], a record
+//! [`crate::dataset::stretch_starts`] calls gaps (its median step found exactly by [`steps`], a record
 //! where an early gap was misjudged read a second time); and every error — a bad cell, a time going
 //! backwards, an unknown column, a broken gzip stream, a `--bin` too long — is produced by the
 //! in-memory path: the first problem stops the stream and the file is read again by [`Dataset`],
