@@ -209,6 +209,31 @@ scenarios! {
     a_warm_up_scaled_by_temperature: "warm-up × temperature", Qma, [Poly], 54, "warmup(900) * t_qma_c", 6.0, false, 0.25;
 }
 
+// A second held-out set (2026-11-28, fifth session): compositions written after the design was
+// fixed, of kinds no earlier scenario has, run once; figures in BENCHMARKS.md.
+scenarios! {
+    /// Missed: verdict none, 7.16× the floor where the truth form reaches 1.02×. The bias follows
+    /// the size of the shell's rate, the same on heating and cooling; the rate alone, odd where
+    /// the effect is even, explains little of it, and the composer composes again only the
+    /// [`tcomp_discover::compose::BEAM`] best depth-one shapes: `abs(rate(t_shell_c))` is not
+    /// among the candidates the diagnosis printed (gradient × relay-of-gradient proxies are, and
+    /// fail the held-out legs).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    the_size_of_a_temperature_rate: "size of a temperature rate", Rlg, [Poly], 61, "abs(rate(t_shell_c))", 6.0, false, 0.25;
+    /// Missed: named `rate(hyst(supply_v - 28.1, 0.05), 290)`, 2.60× where the truth form reaches
+    /// 1.26×. The truth's own shape, `rate(clamp(supply_v, 27.9, 28.3))` with exact bounds, led by
+    /// evidence (+573 nats against +298) and beat its placebos, but the trainer's refit with it
+    /// made the held-out blocks 3.8 % worse: the fit, not the search, failed it (issue 25's kind).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    the_rate_of_a_saturating_input: "rate of a saturating input", Qma, [Poly], 62, "rate(clamp(supply_v, 27.9, 28.3), 300)", 6.0, true, 0.25;
+    /// Named as `sq(abs(supply_v - 28))` — the same function (`sq` of `abs` is `sq`), the centre
+    /// exact — at 1.07× the floor where the truth form reaches 1.07×; the shape check here is
+    /// written out, not algebraic, so it counts another shape. (`sq` takes no shift of its own:
+    /// `sq(x − c)` is in the span of `sq(x)`, `x` and 1, which holds only when `x` is in the model.)
+    #[ignore = "named as an equal function the shape check does not recognise: run with --ignored"]
+    a_parabola_in_an_input: "parabola in an input", Qma, [Poly], 63, "sq(supply_v - 28)", 6.0, true, 0.25;
+}
+
 #[test]
 fn shapes_and_numbers_are_read() {
     assert_eq!(shape("hyst(t_qma_c - 35.5, 6)"), "hyst(t_qma_c-#)");
