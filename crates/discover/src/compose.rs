@@ -50,7 +50,9 @@
 //! a square in temperature is a shape of the bias–temperature curve, which the model's own terms
 //! in temperature fit — not a missing signal (measured: with them, a drifting run with a case
 //! thermometer got `abs(t_case_c + 28)` and `clamp(t_case_c, 37.4, 48.8)` named, 2 of 20 fresh
-//! seeds, and a lag hidden in a gappy log was named as a kink of the lag).
+//! seeds, and a lag hidden in a gappy log was named as a kink of the lag). A temperature's rate
+//! is not a temperature, though: memoryless functions of a rate are composed (`abs(rate(T))`, a
+//! bias the same on heating and cooling, was pruned as a curve shape and missed, 7.2× the floor).
 //! Pruned by evidence: only the [`BEAM`] best depth-one shapes are composed again, and only the
 //! [`PROPOSED`] best shapes that no listed family already covers are handed on. They are then
 //! scored, refitted, placebo-tested — each placebo the best of the same shape's members on the
@@ -63,8 +65,9 @@
 //!
 //! Measured (`tests/composed.rs`, `tests/false_discoveries.rs`, BENCHMARKS.md): a mode hop, a
 //! relay on a supply voltage and a saturating supply are named with their parameters exactly,
-//! the rate of a lagged input as a lagged rate; an input times a rate, a lagged rate (named as
-//! the lag it equals with the model's own `T`), a narrow mode hop and a lagged relay are not yet.
+//! the rate of a lagged input as a lagged rate, the size of a temperature's rate; an input times
+//! a rate, a lagged rate (named as the lag it equals with the model's own `T`), a narrow mode hop,
+//! a lagged relay and the rate of a saturating input are not yet.
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
@@ -870,7 +873,16 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
                     .any(|(g, b)| g.name == f.name && b.keeps_level),
                 Op::Times(_) => false,
             };
-        for &(f, b) in functions.iter().filter(|(f, _)| allowed(f, &e)) {
+        // A temperature's rate is not a temperature: a memoryless function of it (`abs(rate(T))`,
+        // a bias the same on heating and cooling) is no shape of the bias–temperature curve. A
+        // rate is told by its measured behaviour: a linear filter whose output is no level.
+        let of_a_rate = matches!(&n.shape.op, Op::Call(g) if functions
+            .iter()
+            .any(|(h, b)| h.name == g.name && b.linear && !b.keeps_level));
+        for &(f, b) in functions
+            .iter()
+            .filter(|(f, _)| allowed(f, &e) || of_a_rate)
+        {
             if matches!(&n.shape.op, Op::Call(g) if g.name == f.name && !b.keeps_level) {
                 continue;
             }

@@ -212,13 +212,10 @@ scenarios! {
 // A second held-out set (2026-11-28, fifth session): compositions written after the design was
 // fixed, of kinds no earlier scenario has, run once; figures in BENCHMARKS.md.
 scenarios! {
-    /// Missed: verdict none, 7.16× the floor where the truth form reaches 1.02×. The bias follows
-    /// the size of the shell's rate, the same on heating and cooling; the rate alone, odd where
-    /// the effect is even, explains little of it, and the composer composes again only the
-    /// [`tcomp_discover::compose::BEAM`] best depth-one shapes: `abs(rate(t_shell_c))` is not
-    /// among the candidates the diagnosis printed (gradient × relay-of-gradient proxies are, and
-    /// fail the held-out legs).
-    #[ignore = "a known miss: run with --ignored to measure it"]
+    /// First run: verdict none, 7.16× the floor — a memoryless function of temperatures alone
+    /// was pruned as a shape of the bias–temperature curve, and a temperature's *rate* was taken
+    /// for a temperature. With rates told apart (by their measured behaviour, not by name):
+    /// `abs(rate(t_shell_c, 67))`, 1.03× where the truth form reaches 1.02×. Development since.
     the_size_of_a_temperature_rate: "size of a temperature rate", Rlg, [Poly], 61, "abs(rate(t_shell_c))", 6.0, false, 0.25;
     /// Missed: named `rate(hyst(supply_v - 28.1, 0.05), 290)`, 2.60× where the truth form reaches
     /// 1.26×. The truth's own shape, `rate(clamp(supply_v, 27.9, 28.3))` with exact bounds, led by
