@@ -61,18 +61,30 @@ pub(super) fn training_blocks(
         .unwrap_or_else(|| equal_edges(t, opts.folds.max(2)));
     let mut out = Vec::new();
     for w in edges.windows(2) {
-        let (lo, hi) = (w[0], w[1]);
-        let block = data.select_time(&roles.time, lo, hi)?;
-        let bin_s =
-            tcomp_train::binning::adaptive_bin(block.time(&roles.time)?, opts.heldout_bin_s, 10);
-        out.push(Split {
-            train: without(data, t, lo, hi),
-            test: data.clone(),
-            bin_s,
-            score: Some((lo, hi)),
-        });
+        out.push(window(roles, data, opts, t, w[0], w[1])?);
     }
     Ok(out)
+}
+
+/// The split that predicts the window `[lo, hi)` of the run from a fit on the rest of it, scored
+/// at the window's own adaptive bin.
+fn window(
+    roles: &Roles,
+    data: &Dataset,
+    opts: &ConfirmOptions,
+    t: &[f64],
+    lo: f64,
+    hi: f64,
+) -> Result<Split> {
+    let block = data.select_time(&roles.time, lo, hi)?;
+    let bin_s =
+        tcomp_train::binning::adaptive_bin(block.time(&roles.time)?, opts.heldout_bin_s, 10);
+    Ok(Split {
+        train: without(data, t, lo, hi),
+        test: data.clone(),
+        bin_s,
+        score: Some((lo, hi)),
+    })
 }
 
 /// The window `[lo, hi)` of the training run (bounded by its first and last rows) cut into `k`
@@ -102,15 +114,7 @@ pub(super) fn parts_of(
         } else {
             lo + (hi - lo) * (i + 1) as f64 / k as f64
         };
-        let part = data.select_time(&roles.time, a, b)?;
-        let bin_s =
-            tcomp_train::binning::adaptive_bin(part.time(&roles.time)?, opts.heldout_bin_s, 10);
-        out.push(Split {
-            train: without(data, t, a, b),
-            test: data.clone(),
-            bin_s,
-            score: Some((a, b)),
-        });
+        out.push(window(roles, data, opts, t, a, b)?);
     }
     Ok(out)
 }
