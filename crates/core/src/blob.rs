@@ -4,6 +4,7 @@
 //! ```text
 //! postcard(Model { magic: b"TCMB", version: u16, meta, program, ranges, rbf, residual })
 //!   ++ postcard(rbf.masks: Vec<u8>)   (format 3 and later only)
+//!   ++ postcard(rbf.kinds: Vec<u8>)   (format 4 and later only)
 //!   ++ CRC-32 (LE)
 //! ```
 //! The magic is four raw bytes and the version a varint, so both are read before the structure and a
@@ -35,12 +36,16 @@ pub const MAGIC: [u8; 4] = *b"TCMB";
 /// Version 2 added `warmup(tau_s)` (time since power-on); a model without it is still version 1,
 /// bit for bit. Version 3 added the per-center feature masks of additive models ([`Rbf::masks`]),
 /// written after the residual level; a model without masks keeps its older version and bytes.
-pub const FORMAT_VERSION: u16 = 3;
+/// Version 4 added the kind of each center ([`Rbf::kinds`]: Gaussian or logistic step), written
+/// after the masks; a model without steps keeps its older version and bytes.
+pub const FORMAT_VERSION: u16 = 4;
 /// The oldest blob format version this build reads: the layout of [`Model`] has not changed since
-/// (format 3 appends a field; a blob of an older version has no masks).
+/// (formats 3 and 4 append fields after it; a blob of an older version has none).
 pub const OLDEST_FORMAT_VERSION: u16 = 1;
 /// The first format whose blobs carry [`Rbf::masks`] after the residual level.
 pub const MASKS_SINCE: u16 = 3;
+/// The first format whose blobs carry [`Rbf::kinds`] after the masks.
+pub const KINDS_SINCE: u16 = 4;
 
 const _: () = assert!(
     crate::lang::NEWEST_SINCE <= FORMAT_VERSION && OLDEST_FORMAT_VERSION <= FORMAT_VERSION,
@@ -283,13 +288,15 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
     }
 
     /// The oldest format that can carry `program` and `rbf`: its newest operation's, and
-    /// [`MASKS_SINCE`] for an additive model.
+    /// [`MASKS_SINCE`] for an additive model, [`KINDS_SINCE`] for one with steps.
     pub fn version_for(program: &Program<'a, N, F>, rbf: &Rbf<C, F>) -> u16 {
         let masks = if rbf.masks.is_empty() { 0 } else { MASKS_SINCE };
+        let kinds = if rbf.kinds.is_empty() { 0 } else { KINDS_SINCE };
         program
             .format_version()
             .max(OLDEST_FORMAT_VERSION)
             .max(masks)
+            .max(kinds)
     }
 
     /// Number of features.
@@ -315,6 +322,11 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
         if !self.rbf.masks.is_empty() && self.version < MASKS_SINCE {
             return Err(BlobError::Inconsistent(
                 "version: older than the additive model's masks (format 3)",
+            ));
+        }
+        if !self.rbf.kinds.is_empty() && self.version < KINDS_SINCE {
+            return Err(BlobError::Inconsistent(
+                "version: older than the model's steps (format 4)",
             ));
         }
         let nf = self.program.n_features();
@@ -366,6 +378,12 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
                 .map_err(map_postcard)?
                 .len();
         }
+        if self.version >= KINDS_SINCE {
+            let rest = buf.get_mut(used..).ok_or(BlobError::BufferTooSmall)?;
+            used += postcard::to_slice(&self.rbf.kinds, rest)
+                .map_err(map_postcard)?
+                .len();
+        }
         let crc = crc32(buf.get(..used).ok_or(BlobError::BufferTooSmall)?);
         let tail = buf
             .get_mut(used..used + 4)
@@ -382,7 +400,7 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
         let body = Self::envelope(bytes)?;
         let (mut model, rest) =
             postcard::take_from_bytes::<Self>(body).map_err(|e| map_body_error(body, e))?;
-        model.rbf.masks = Self::trailing_masks(model.version, rest)?;
+        (model.rbf.masks, model.rbf.kinds) = Self::trailing(model.version, rest)?;
         model.validate()?;
         Ok(model)
     }
@@ -398,7 +416,7 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
             <Self as Deserialize<'a>>::deserialize_in_place(&mut de, model)
                 .map_err(|e| map_body_error(body, e))?;
             let rest = de.finalize().map_err(map_postcard)?;
-            model.rbf.masks = Self::trailing_masks(model.version, rest)?;
+            (model.rbf.masks, model.rbf.kinds) = Self::trailing(model.version, rest)?;
             model.validate()
         });
         if result.is_err() {
@@ -407,20 +425,25 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
         result
     }
 
-    /// The masks after the residual level (format 3 on; none before), and nothing after them.
-    fn trailing_masks(version: u16, rest: &[u8]) -> Result<Vec<u8, C>, BlobError> {
-        if version < MASKS_SINCE {
-            return if rest.is_empty() {
-                Ok(Vec::new())
-            } else {
-                Err(BlobError::Malformed)
-            };
-        }
-        let (masks, after) = postcard::take_from_bytes::<Vec<u8, C>>(rest).map_err(map_postcard)?;
-        if !after.is_empty() {
+    /// The masks after the residual level (format 3 on; none before), then the kinds (format 4
+    /// on; none before), and nothing after them.
+    #[allow(clippy::type_complexity)]
+    fn trailing(version: u16, rest: &[u8]) -> Result<(Vec<u8, C>, Vec<u8, C>), BlobError> {
+        let mut rest = rest;
+        let mut take = |since: u16| -> Result<Vec<u8, C>, BlobError> {
+            if version < since {
+                return Ok(Vec::new());
+            }
+            let (v, after) = postcard::take_from_bytes::<Vec<u8, C>>(rest).map_err(map_postcard)?;
+            rest = after;
+            Ok(v)
+        };
+        let masks = take(MASKS_SINCE)?;
+        let kinds = take(KINDS_SINCE)?;
+        if !rest.is_empty() {
             return Err(BlobError::Malformed);
         }
-        Ok(masks)
+        Ok((masks, kinds))
     }
 
     /// An empty model for [`decode_into`](Self::decode_into) to overwrite field by field.

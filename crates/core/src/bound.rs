@@ -40,6 +40,14 @@
 //!   nothing when it is `≥ EVAL_CUTOFF` (the evaluator skips it). Outside its domain the fast
 //!   exponential returns garbage (up to ~1e11 for `|u| ≳ 2²²`), and NaN for an exponent that
 //!   overflowed to ±inf: the checks above are what keep it an exponential.
+//! * **Steps** ([`Rbf::kinds`]). A step's exponent `u = p + Σ qₖzₖ` only needs to stay finite:
+//!   the evaluator takes the fast exponential of `|u|` (inside its domain below the cutoff, flushed
+//!   to zero above) and returns `w/(1 + e)` or `w·e/(1 + e)`, at most `|w|·(1 + 1e-5)` with the
+//!   division's rounding. So `|p| + Σ|qₖ|·max|zₖ|` must stay below `f32::MAX / 2`, and a step adds
+//!   `|w|·(1 + 2·1e-5)` to the sum; it does not enter the lowest Gaussian exponent.
+//! * **Powers** (kinds square and cube). `|u| ≤ A = |p| + Σ|qₖ|·max|zₖ|` (raised by the rounding
+//!   of its `n + 1` operations), so a power adds at most `|w|·Aⁿ` (raised by its own two or three
+//!   multiplications' rounding); `Aⁿ` must stay below `f32::MAX / 2`.
 //! * **Sum.** `|correction| ≤ (|w₀| + Σₖ|lₖ|·Mₖ + Σⱼ|wⱼ|·eⱼ)·(1 + 1.01·(m + n + 4)·ε)` for `m`
 //!   centers, `Mₖ` the largest `|zₖ|` of the linear box: every partial sum is below it.
 //!
@@ -54,7 +62,7 @@
 
 use crate::blob::FeatureRange;
 use crate::fastexp::{EVAL_CUTOFF, EXP2_REL_ERR};
-use crate::rbf::Rbf;
+use crate::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP, Rbf};
 
 /// The largest `|correction|` a model may produce anywhere in its range box, in target units: four
 /// orders of magnitude above the largest full scale of any sensor in any unit the project uses
@@ -176,6 +184,32 @@ pub fn check<const C: usize, const F: usize>(
     let mut gauss_abs = 0.0f32;
     let mut min_exponent = f32::INFINITY;
     for (j, center) in rbf.centers.iter().enumerate() {
+        let kind = rbf.kinds.get(j).copied().unwrap_or(KIND_GAUSSIAN);
+        if kind != KIND_GAUSSIAN {
+            let mut a_max = center.p.abs();
+            for (&(a, b), &q) in gauss.iter().zip(&center.q.0).take(nf) {
+                a_max += q.abs() * a.abs().max(b.abs());
+            }
+            // The evaluator's n + 1 roundings of u and this sum's own.
+            a_max *= 1.0 + rounding(2 * nf + 4);
+            if !below(a_max, F32_LIMIT) {
+                return Err("rbf.centers: a step's or a power's argument overflows f32");
+            }
+            let value = match kind {
+                KIND_STEP => 1.0 + 2.0 * EXP2_REL_ERR,
+                KIND_SQUARE => a_max * a_max * (1.0 + rounding(4)),
+                KIND_CUBE => a_max * a_max * a_max * (1.0 + rounding(6)),
+                _ => return Err("rbf.kinds: unknown kind"),
+            };
+            if !below(value, F32_LIMIT) {
+                return Err("rbf.centers: a power overflows f32");
+            }
+            gauss_abs += center.w.abs() * value;
+            if !below(gauss_abs, F32_LIMIT) {
+                return Err("rbf: the correction can exceed 1e12 in the range box");
+            }
+            continue;
+        }
         let (p, g) = (center.p, center.g);
         let alpha = g * (1.0 - c);
         let mut a_max = p + g * zz_max;

@@ -25,10 +25,39 @@
 //! centers all span every feature) the evaluation is the plain one above, bit for bit; with masks
 //! the masked sum runs in the same feature order, so a full mask gives the same bits too.
 //!
+//! # Steps
+//! An additive model may also hold logistic steps ([`Rbf::kinds`], blob format 4): a center of kind
+//! [`KIND_STEP`] contributes `wj·S(uj)` with `S(u) = 1/(1 + e^(−u))` and `uj = pj + Σ_{k∈Mj} qjk·zk`
+//! (eval units; `gj` is zero and unused). Why: a Gaussian fades back to zero on both sides, so a bias
+//! that changes level at some temperature and stays there (a knee, a mode change, a smooth step)
+//! needs Gaussians to hold the level all along its flat part, and beyond the trained range they
+//! fade where the physics stays put. A step holds its level on both sides by construction, and a
+//! wide one bends like a cubic inside the range without diverging outside it. `S` is computed from
+//! the same fast exponential, `e = 2^(−|u|/16)`, as `1/(1 + e)` for `u ≥ 0` and `e/(1 + e)` below:
+//! one exponential and one division, and never an exponential of a positive argument.
+//!
+//! Kinds [`KIND_SQUARE`] and [`KIND_CUBE`] are the powers `wj·uj²` and `wj·uj³` of the same
+//! `uj = pj + Σ qjk·zk`, in natural units: the low-order polynomial in one feature that a thermal
+//! bias mostly is (the cubic PX4 and ArduPilot fly), as terms of an additive model beside
+//! Gaussians and steps in other features, without spending a feature slot of the program on each
+//! power. Like the Gaussians they see the features clamped to the trained range
+//! ([`Rbf::eval_split`]), so they hold their edge values outside it as the clamped cubic does.
+//!
 //! Summation order is fixed and no fused multiply-add is used: host and Cortex-M4F give identical
 //! bits. A center whose exponent exceeds [`EXP_CUTOFF`] contributes less than `2e-9·|w|` and is skipped.
 
 use crate::fastexp::{EVAL_CUTOFF, EVAL_UNITS_PER_NAT, EXP_CUTOFF, exp2_16_neg};
+
+/// [`Rbf::kinds`]: a Gaussian center (the only kind before blob format 4).
+pub const KIND_GAUSSIAN: u8 = 0;
+/// [`Rbf::kinds`]: a logistic step along the center's masked features (see the module doc).
+pub const KIND_STEP: u8 = 1;
+/// [`Rbf::kinds`]: the square `u²` of `u = p + Σ qk·zk` (natural units; see the module doc).
+pub const KIND_SQUARE: u8 = 2;
+/// [`Rbf::kinds`]: the cube `u³` of `u = p + Σ qk·zk` (natural units; see the module doc).
+pub const KIND_CUBE: u8 = 3;
+/// The largest kind this build evaluates.
+pub const KIND_LAST: u8 = KIND_CUBE;
 use crate::point::Point;
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
@@ -75,6 +104,36 @@ impl<const F: usize> Center<F> {
         (Point(c), self.g / EVAL_UNITS_PER_NAT, self.w)
     }
 
+    /// A logistic step `w·S(b + Σk ak·zk)` (natural units; `a` zero outside the step's features),
+    /// computed in f64 and stored in eval units with `g = 0`.
+    pub fn step_from_natural(a: &[f64], b: f64, w: f64) -> Self {
+        let e = EVAL_UNITS_PER_NAT as f64;
+        let mut q = [0.0f32; F];
+        for (qk, ak) in q.iter_mut().zip(a) {
+            *qk = (e * ak) as f32 + 0.0;
+        }
+        Self {
+            p: (e * b) as f32,
+            q: Point(q),
+            g: 0.0,
+            w: w as f32,
+        }
+    }
+
+    /// A power `w·(b + Σk ak·zk)^n` (kind [`KIND_SQUARE`] or [`KIND_CUBE`]), natural units, `g = 0`.
+    pub fn power_from_natural(a: &[f64], b: f64, w: f64) -> Self {
+        let mut q = [0.0f32; F];
+        for (qk, ak) in q.iter_mut().zip(a) {
+            *qk = *ak as f32 + 0.0;
+        }
+        Self {
+            p: b as f32,
+            q: Point(q),
+            g: 0.0,
+            w: w as f32,
+        }
+    }
+
     /// σ of this Gaussian in normalised units.
     pub fn sigma(&self) -> f32 {
         libm::sqrtf(EVAL_UNITS_PER_NAT / (2.0 * self.g))
@@ -101,6 +160,67 @@ pub struct Rbf<const C: usize, const F: usize> {
     /// [`crate::blob`]), so the derived layout of this struct is the one formats 1 and 2 have.
     #[serde(skip)]
     pub masks: Vec<u8, C>,
+    /// Kind of each center ([`KIND_GAUSSIAN`] or [`KIND_STEP`]), or empty: every center is a
+    /// Gaussian. Only with [`Rbf::masks`]; stored after them, from format 4 on.
+    #[serde(skip)]
+    pub kinds: Vec<u8, C>,
+}
+
+/// `zk²` per feature.
+#[inline(always)]
+fn squares<const F: usize>(z: &[f32; F]) -> [f32; F] {
+    let mut sq = [0.0f32; F];
+    for (s, zk) in sq.iter_mut().zip(z) {
+        *s = *zk * *zk;
+    }
+    sq
+}
+
+/// One Gaussian over the features of `mask` (`sq`: the squares of `z`).
+#[inline(always)]
+fn masked_gaussian<const F: usize>(c: &Center<F>, mask: u8, sq: &[f32; F], z: &[f32; F]) -> f32 {
+    let mut zz = 0.0f32;
+    for (k, s) in sq.iter().enumerate() {
+        if mask >> k & 1 == 1 {
+            zz += *s;
+        }
+    }
+    let mut u = c.p + c.g * zz;
+    for (qk, zk) in c.q.0.iter().zip(z) {
+        u += *qk * *zk;
+    }
+    if u < EVAL_CUTOFF {
+        c.w * exp2_16_neg(u)
+    } else {
+        0.0
+    }
+}
+
+/// `p + Σ qk·zk`, in feature order.
+#[inline(always)]
+fn affine<const F: usize>(c: &Center<F>, z: &[f32; F]) -> f32 {
+    let mut u = c.p;
+    for (qk, zk) in c.q.0.iter().zip(z) {
+        u += *qk * *zk;
+    }
+    u
+}
+
+/// One logistic step, `w·S(p + Σ qk·zk)` (`q` is zero outside its mask). Past the cutoff the
+/// exponential is flushed to zero, so `S` is exactly 0 or 1 there; a NaN exponent gives 0.
+#[inline(always)]
+fn step<const F: usize>(c: &Center<F>, z: &[f32; F]) -> f32 {
+    let u = affine(c, z);
+    let a = if u < 0.0 { -u } else { u };
+    let e = if a < EVAL_CUTOFF { exp2_16_neg(a) } else { 0.0 };
+    let s = if u >= 0.0 {
+        1.0 / (1.0 + e)
+    } else if u < 0.0 {
+        e / (1.0 + e)
+    } else {
+        0.0
+    };
+    c.w * s
 }
 
 /// Why RBF coefficients are unusable; the `&str` names the field.
@@ -122,6 +242,7 @@ impl<const C: usize, const F: usize> Default for Rbf<C, F> {
             linear: Point::default(),
             bias: 0.0,
             masks: Vec::new(),
+            kinds: Vec::new(),
         }
     }
 }
@@ -166,6 +287,9 @@ impl<const C: usize, const F: usize> Rbf<C, F> {
     /// `Σj wj·exp(−γj‖z − cj‖²)` in the expanded form, `zz = ‖z‖²`.
     #[inline(always)]
     fn gaussians(&self, z: &[f32; F], zz: f32) -> f32 {
+        if !self.kinds.is_empty() {
+            return self.mixed_centers(z);
+        }
         if !self.masks.is_empty() {
             return self.masked_gaussians(z);
         }
@@ -186,25 +310,33 @@ impl<const C: usize, const F: usize> Rbf<C, F> {
     /// only, summed in feature order as `‖z‖²` is (so a full mask gives the plain sum's bits).
     #[inline(always)]
     fn masked_gaussians(&self, z: &[f32; F]) -> f32 {
-        let mut sq = [0.0f32; F];
-        for (s, zk) in sq.iter_mut().zip(z) {
-            *s = *zk * *zk;
-        }
+        let sq = squares(z);
         let mut acc = 0.0f32;
         for (c, &mask) in self.centers.iter().zip(&self.masks) {
-            let mut zz = 0.0f32;
-            for (k, s) in sq.iter().enumerate() {
-                if mask >> k & 1 == 1 {
-                    zz += *s;
+            acc += masked_gaussian(c, mask, &sq, z);
+        }
+        acc
+    }
+
+    /// The centers of an additive model with steps: each by its kind, in order (a model whose
+    /// kinds are all Gaussian gives [`Self::masked_gaussians`]' bits).
+    #[inline(always)]
+    fn mixed_centers(&self, z: &[f32; F]) -> f32 {
+        let sq = squares(z);
+        let mut acc = 0.0f32;
+        for ((c, &mask), &kind) in self.centers.iter().zip(&self.masks).zip(&self.kinds) {
+            acc += match kind {
+                KIND_STEP => step(c, z),
+                KIND_SQUARE => {
+                    let u = affine(c, z);
+                    c.w * (u * u)
                 }
-            }
-            let mut u = c.p + c.g * zz;
-            for (qk, zk) in c.q.0.iter().zip(z) {
-                u += *qk * *zk;
-            }
-            if u < EVAL_CUTOFF {
-                acc += c.w * exp2_16_neg(u);
-            }
+                KIND_CUBE => {
+                    let u = affine(c, z);
+                    c.w * (u * u * u)
+                }
+                _ => masked_gaussian(c, mask, &sq, z),
+            };
         }
         acc
     }
@@ -245,7 +377,25 @@ impl<const C: usize, const F: usize> Rbf<C, F> {
             if !c.w.is_finite() {
                 return Err(RbfError::NonFinite("rbf.centers.w"));
             }
-            if c.g <= 0.0 || c.p < 0.0 {
+        }
+        if !self.kinds.is_empty() {
+            if self.kinds.len() != self.centers.len() || self.masks.is_empty() {
+                return Err(RbfError::Inconsistent(
+                    "rbf.kinds: one per center, and only with masks",
+                ));
+            }
+            if self.kinds.iter().any(|k| *k > KIND_LAST) {
+                return Err(RbfError::Inconsistent("rbf.kinds: unknown kind"));
+            }
+        }
+        for (j, c) in self.centers.iter().enumerate() {
+            if self.kinds.get(j).is_some_and(|k| *k != KIND_GAUSSIAN) {
+                if c.g != 0.0 {
+                    return Err(RbfError::Inconsistent(
+                        "rbf.centers: a step's or a power's g must be 0",
+                    ));
+                }
+            } else if c.g <= 0.0 || c.p < 0.0 {
                 return Err(RbfError::Inconsistent(
                     "rbf.centers: g must be > 0 and p >= 0",
                 ));

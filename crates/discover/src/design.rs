@@ -46,7 +46,8 @@ pub(crate) fn error_of(data: &Dataset, roles: &Roles) -> Result<Vec<f64>> {
     Ok(target.iter().zip(&reference).map(|(a, b)| a - b).collect())
 }
 
-/// Base design transform: standardised linear columns and the Gaussians of `rbf`.
+/// Base design transform: standardised linear columns and the basis functions of `rbf` (its
+/// Gaussians over their masked features, and its steps).
 pub(crate) struct Transform {
     pub(crate) mean: Vec<f64>,
     pub(crate) sd: Vec<f64>,
@@ -69,9 +70,8 @@ impl Transform {
                 phi[(i, 1 + k)] = (x[k] - self.mean[k]) / self.sd[k];
             }
             let z = self.rbf.normalise(&x);
-            for (j, (c, g)) in self.rbf.centers.iter().zip(&self.rbf.gamma).enumerate() {
-                let d2: f64 = z.iter().zip(c).map(|(a, b)| (a - b) * (a - b)).sum();
-                phi[(i, 1 + d + j)] = (-g * d2).exp();
+            for j in 0..self.rbf.centers.len() {
+                phi[(i, 1 + d + j)] = self.rbf.basis(j, &z);
             }
         }
         phi

@@ -40,8 +40,8 @@
 //! case of `search_eval` but one kept its model; that one, rate-driven with a cubic in T, improved).
 //!
 //! A third structure competes with both: the additive model (module `additive`: one-feature
-//! Gaussians placed one by one beside a linear term with one prior per feature, judged under AR(1)
-//! noise), for physics that adds — a thermal bias plus a supply-voltage term — where one RBF over
+//! Gaussians, logistic steps and powers placed one by one beside a linear term with one prior per
+//! feature, judged under AR(1) noise), for physics that adds — a thermal bias plus a supply-voltage term — where one RBF over
 //! all features fades on a verification run that combines them as training never did. It replaces
 //! the pick above only when its evidence, and the pick's refitted under the same noise model, differ
 //! by the Occam margin. `--no-additive` (or [`BayesOptions::additive`]) leaves it out; the
@@ -331,6 +331,7 @@ impl CubicCandidate {
             linear: lin.iter().map(|w| w * ys).collect(),
             bias: ym + ys * b0,
             masks: Vec::new(),
+            kinds: Vec::new(),
         };
         BayesFit {
             rbf,
@@ -365,9 +366,9 @@ crate::layer! {
             arg(long = "no-cubic", num_args = 0, default_missing_value = "false")
         )]
         pub cubic: Option<bool>,
-        /// Do not offer bayes the additive structure (one-feature Gaussians placed one by one
-        /// beside the linear term, judged under AR(1) noise; chosen only by evidence); spec key
-        /// `additive = false`.
+        /// Do not offer bayes the additive structure (one-feature Gaussians, steps and powers
+        /// placed one by one beside the linear term, judged under AR(1) noise; chosen only by
+        /// evidence); spec key `additive = false`.
         #[cfg_attr(
             feature = "cli",
             arg(long = "no-additive", num_args = 0, default_missing_value = "false")

@@ -84,6 +84,7 @@ pub fn fit_selecting(
         weights,
         bias,
         masks: Vec::new(),
+        kinds: Vec::new(),
     })
 }
 

@@ -52,6 +52,7 @@ pub fn fit(x: &[Vec<f64>], y: &[f64]) -> Result<Rbf64, TrainError> {
         linear,
         bias,
         masks: Vec::new(),
+        kinds: Vec::new(),
     })
 }
 

@@ -10,6 +10,7 @@ use crate::features::F;
 use nalgebra::DMatrix;
 use tcomp_core::point::Point;
 use tcomp_core::rbf::Center;
+pub use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP};
 use tcomp_core::{HOST_CENTERS, Rbf};
 
 /// Centers per host model.
@@ -24,7 +25,7 @@ pub struct Rbf64 {
     pub scale: Vec<f64>,
     /// Centers in normalised units.
     pub centers: Vec<Vec<f64>>,
-    /// `γ = 1/(2σ²)` per center.
+    /// `γ = 1/(2σ²)` per Gaussian; a step's slope `1/s` (see [`Rbf64::kinds`]).
     pub gamma: Vec<f64>,
     /// Center weights.
     pub weights: Vec<f64>,
@@ -36,6 +37,33 @@ pub struct Rbf64 {
     /// outside it are zero), or empty: every center spans every feature. An additive model's
     /// groups (see [`crate::bayes`]), carried to the core's [`Rbf::masks`].
     pub masks: Vec<u8>,
+    /// Kind per center ([`KIND_GAUSSIAN`], [`KIND_STEP`], [`KIND_SQUARE`] or [`KIND_CUBE`]), or
+    /// empty: every center is a Gaussian. With `uj = γj·Σ_{k∈Mj}(zk − cjk)`, a step is `S(uj)`,
+    /// `S(u) = 1/(1 + e^(−u))` (it rises over a width `1/γj` around `cj` and holds its level on
+    /// both sides), a square `uj²` and a cube `uj³` (the core's [`Rbf::kinds`]).
+    pub kinds: Vec<u8>,
+}
+
+/// The logistic `1/(1 + e^(−u))`, computed without overflow on either side.
+pub fn logistic(u: f64) -> f64 {
+    if u >= 0.0 {
+        1.0 / (1.0 + (-u).exp())
+    } else {
+        let e = u.exp();
+        e / (1.0 + e)
+    }
+}
+
+/// A step's argument `γ·Σ_{k∈mask}(zk − ck)`.
+pub fn step_arg(z: &[f64], c: &[f64], slope: f64, mask: Option<u8>) -> f64 {
+    let s: f64 = z
+        .iter()
+        .zip(c)
+        .enumerate()
+        .filter(|(k, _)| mask.is_none_or(|m| *k < 8 && m >> k & 1 == 1))
+        .map(|(_, (a, b))| a - b)
+        .sum();
+    slope * s
 }
 
 impl Rbf64 {
@@ -55,16 +83,30 @@ impl Rbf64 {
         for (l, zk) in self.linear.iter().zip(&z) {
             acc += l * zk;
         }
-        for (j, ((c, g), w)) in self
-            .centers
-            .iter()
-            .zip(&self.gamma)
-            .zip(&self.weights)
-            .enumerate()
-        {
-            acc += w * (-g * masked_dist2(&z, c, self.masks.get(j).copied())).exp();
+        for (j, w) in self.weights.iter().enumerate() {
+            acc += w * self.basis(j, &z);
         }
         acc
+    }
+
+    /// Center `j`'s basis function at normalised features `z`: its Gaussian over its masked
+    /// features, or its step (0 for a center that does not exist).
+    pub fn basis(&self, j: usize, z: &[f64]) -> f64 {
+        let (Some(c), Some(g)) = (self.centers.get(j), self.gamma.get(j)) else {
+            return 0.0;
+        };
+        let mask = self.masks.get(j).copied();
+        match self.kind(j) {
+            KIND_STEP => logistic(step_arg(z, c, *g, mask)),
+            KIND_SQUARE => step_arg(z, c, *g, mask).powi(2),
+            KIND_CUBE => step_arg(z, c, *g, mask).powi(3),
+            _ => (-g * masked_dist2(z, c, mask)).exp(),
+        }
+    }
+
+    /// Center `j`'s kind ([`KIND_GAUSSIAN`] when the model has no kinds).
+    pub fn kind(&self, j: usize) -> u8 {
+        self.kinds.get(j).copied().unwrap_or(KIND_GAUSSIAN)
     }
 
     /// The coefficients the core evaluates (f32).
@@ -83,13 +125,35 @@ impl Rbf64 {
             bias: self.bias as f32,
             ..Rbf::default()
         };
-        for ((c, g), w) in self.centers.iter().zip(&self.gamma).zip(&self.weights) {
-            rbf.centers
-                .push(Center::from_natural(c, *g, *w))
-                .map_err(|_| self.over_capacity())?;
+        for (j, ((c, g), w)) in self
+            .centers
+            .iter()
+            .zip(&self.gamma)
+            .zip(&self.weights)
+            .enumerate()
+        {
+            let kind = self.kind(j);
+            let center = if kind == KIND_GAUSSIAN {
+                Center::from_natural(c, *g, *w)
+            } else {
+                // γ·Σ_{k∈M}(zk − ck) = Σ ak·zk + b, ak = γ on the mask, b = −γ·Σ ck.
+                let mask = self.masks.get(j).copied();
+                let on = |k: usize| mask.is_none_or(|m| k < 8 && m >> k & 1 == 1);
+                let a: Vec<f64> = (0..c.len()).map(|k| if on(k) { *g } else { 0.0 }).collect();
+                let b = -g * (0..c.len()).filter(|&k| on(k)).map(|k| c[k]).sum::<f64>();
+                if kind == KIND_STEP {
+                    Center::step_from_natural(&a, b, *w)
+                } else {
+                    Center::power_from_natural(&a, b, *w)
+                }
+            };
+            rbf.centers.push(center).map_err(|_| self.over_capacity())?;
         }
         for m in &self.masks {
             rbf.masks.push(*m).map_err(|_| self.over_capacity())?;
+        }
+        for k in &self.kinds {
+            rbf.kinds.push(*k).map_err(|_| self.over_capacity())?;
         }
         Ok(rbf)
     }

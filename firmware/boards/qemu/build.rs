@@ -42,6 +42,9 @@ fn main() {
     blob.truncate(len);
     fs::write(out.join("smoke_model.tcm"), &blob).expect("write blob");
     fs::write(out.join("smoke_additive.tcm"), additive_blob(&model)).expect("write blob");
+    let (kinds, expected) = kinds_blob(&model);
+    fs::write(out.join("smoke_kinds.tcm"), kinds).expect("write blob");
+    fs::write(out.join("smoke_kinds_expected.bin"), expected).expect("write expected");
 
     let decoded = Model::<'_, 32, 4, 24>::decode(&blob).expect("example blob decodes");
     let mut channel = Channel::<24, 4>::new(PERIOD_S);
@@ -62,6 +65,71 @@ fn main() {
         vector.extend_from_slice(&u32::from(o.status.0).to_le_bytes());
     }
     fs::write(out.join("smoke_vector.bin"), &vector).expect("write vector");
+}
+
+/// The example model made additive with every kind of term (blob format 4): each center over one
+/// feature, the features in turn; the even centers logistic steps, the odd ones Gaussians, the last
+/// two a square and a cube. With it, the host's output at [`kinds_points`] (f32 bits, LE), which
+/// the firmware must reproduce.
+fn kinds_blob(model: &Model<'static, 32, 4, 24>) -> (Vec<u8>, Vec<u8>) {
+    use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP};
+    let mut m = model.clone();
+    let nf = m.n_features();
+    let n = m.rbf.centers.len();
+    for j in 0..n {
+        let (c, gamma, w) = m.rbf.centers[j].to_natural();
+        let k = j % nf;
+        let (ck, w) = (f64::from(c.0[k]), f64::from(w));
+        let mut a = [0.0f64; 4];
+        let kind = if j + 2 == n {
+            KIND_SQUARE
+        } else if j + 1 == n {
+            KIND_CUBE
+        } else if j % 2 == 0 {
+            KIND_STEP
+        } else {
+            KIND_GAUSSIAN
+        };
+        m.rbf.centers[j] = if kind == KIND_GAUSSIAN {
+            a[k] = ck;
+            tcomp_core::Center::from_natural(&a, f64::from(gamma), w)
+        } else {
+            // A step as wide as the Gaussian (slope 1/σ), a power of z − c; weights kept small.
+            let slope = f64::from(gamma).sqrt();
+            a[k] = slope;
+            if kind == KIND_STEP {
+                tcomp_core::Center::step_from_natural(&a, -slope * ck, w)
+            } else {
+                tcomp_core::Center::power_from_natural(&a, -slope * ck, 0.01 * w)
+            }
+        };
+        m.rbf.masks.push(1 << k).expect("32 masks");
+        m.rbf.kinds.push(kind).expect("32 kinds");
+    }
+    m.version = Model::version_for(&m.program, &m.rbf);
+    let mut blob = vec![0u8; 8192];
+    let len = m
+        .encode(&mut blob)
+        .expect("example with every kind encodes");
+    blob.truncate(len);
+    let expected = kinds_points(&m)
+        .iter()
+        .flat_map(|x| m.rbf.eval(x).to_le_bytes())
+        .collect();
+    (blob, expected)
+}
+
+/// Eight feature vectors across the model's range box, on its diagonal.
+fn kinds_points(m: &Model<'static, 32, 4, 24>) -> Vec<[f32; 4]> {
+    (0..8)
+        .map(|i| {
+            let mut x = [0.0f32; 4];
+            for (k, r) in m.ranges.iter().enumerate().take(4) {
+                x[k] = r.lo + (r.hi - r.lo) * i as f32 / 7.0;
+            }
+            x
+        })
+        .collect()
 }
 
 /// The example model made additive (blob format 3): each center over one feature, the features in

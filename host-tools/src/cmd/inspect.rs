@@ -8,6 +8,7 @@ use clap::Args as ClapArgs;
 use serde_json::json;
 use std::path::PathBuf;
 use tcomp_core::HostModel;
+use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP};
 
 use crate::output::printable::text;
 
@@ -59,8 +60,19 @@ pub fn blob_json(args: &Args, bytes: &[u8], m: &HostModel<'_>) -> serde_json::Va
         .iter()
         .enumerate()
         .map(|(j, c)| {
+            if kind(m, j) != KIND_GAUSSIAN {
+                let (a, b) = affine(m, j);
+                return json!({
+                    "kind": kind_name(kind(m, j)),
+                    "features": spanned(m, j),
+                    "slope": a,
+                    "offset": b,
+                    "weight": c.w,
+                });
+            }
             let (pos, gamma, w) = c.to_natural();
             json!({
+                "kind": "gaussian",
                 "center": pos.0.get(..nf).unwrap_or(&[]),
                 "features": spanned(m, j),
                 "gamma": gamma,
@@ -188,6 +200,16 @@ fn print_blob(args: &Args, bytes: &[u8], m: &HostModel<'_>) {
         } else {
             format!("  over {:?}", spanned(m, j))
         };
+        if kind(m, j) != KIND_GAUSSIAN {
+            let (a, b) = affine(m, j);
+            outln!(
+                "  {j:>3}  {} of u = {b:+.4} + {:?}·z  w {:+.4e}{over}",
+                kind_name(kind(m, j)),
+                a,
+                c.w
+            );
+            continue;
+        }
         outln!(
             "  {j:>3}  σ {:.3}  w {:+.4e}  at {:?}{over}",
             c.sigma(),
@@ -203,13 +225,47 @@ fn print_blob(args: &Args, bytes: &[u8], m: &HostModel<'_>) {
     );
 }
 
+/// Center `j`'s kind ([`KIND_GAUSSIAN`] for a model without kinds).
+fn kind(m: &HostModel<'_>, j: usize) -> u8 {
+    m.rbf.kinds.get(j).copied().unwrap_or(KIND_GAUSSIAN)
+}
+
+/// A kind's name in the report.
+fn kind_name(k: u8) -> &'static str {
+    match k {
+        KIND_STEP => "step",
+        KIND_SQUARE => "square",
+        KIND_CUBE => "cube",
+        _ => "gaussian",
+    }
+}
+
+/// A step's or a power's argument `u = b + Σ ak·zk` in natural units, as `(a, b)` over the used
+/// features (a step is `S(u)`, stored in the fast exponential's units).
+fn affine(m: &HostModel<'_>, j: usize) -> (Vec<f32>, f32) {
+    let c = &m.rbf.centers[j];
+    let unit = if kind(m, j) == KIND_STEP {
+        tcomp_core::fastexp::EVAL_UNITS_PER_NAT
+    } else {
+        1.0
+    };
+    let a =
+        c.q.0
+            .iter()
+            .take(m.n_features())
+            .map(|q| q / unit)
+            .collect();
+    (a, c.p / unit)
+}
+
 /// The features center `j` spans (indices into the program's features).
 fn spanned(m: &HostModel<'_>, j: usize) -> Vec<usize> {
     (0..m.n_features()).filter(|&k| m.rbf.spans(j, k)).collect()
 }
 
-/// The model's structure in words, from the centers' masks (format 3): "joint" when every center
-/// spans every feature, else each group of features with its number of centers.
+/// The model's structure in words, from the centers' masks (format 3) and kinds (format 4):
+/// "joint" when every center spans every feature, else each group of features with its number of
+/// centers of each kind.
 pub fn structure(m: &HostModel<'_>) -> String {
     if m.rbf.centers.is_empty() {
         return "linear term alone (no Gaussians)".into();
@@ -220,12 +276,12 @@ pub fn structure(m: &HostModel<'_>) -> String {
             m.rbf.centers.len()
         );
     }
-    let mut groups: Vec<(Vec<usize>, usize)> = Vec::new();
+    let mut groups: Vec<(Vec<usize>, u8, usize)> = Vec::new();
     for j in 0..m.rbf.centers.len() {
-        let f = spanned(m, j);
-        match groups.iter_mut().find(|(g, _)| *g == f) {
-            Some((_, n)) => *n += 1,
-            None => groups.push((f, 1)),
+        let (f, k) = (spanned(m, j), kind(m, j));
+        match groups.iter_mut().find(|(g, gk, _)| *g == f && *gk == k) {
+            Some((_, _, n)) => *n += 1,
+            None => groups.push((f, k, 1)),
         }
     }
     let name = |k: &usize| {
@@ -236,9 +292,15 @@ pub fn structure(m: &HostModel<'_>) -> String {
     };
     let parts: Vec<String> = groups
         .iter()
-        .map(|(f, n)| {
+        .map(|(f, k, n)| {
             let names: Vec<String> = f.iter().map(name).collect();
-            format!("{n} Gaussians over ({})", names.join(", "))
+            let what = match *k {
+                KIND_STEP => "steps",
+                KIND_SQUARE => "squares",
+                KIND_CUBE => "cubes",
+                _ => "Gaussians",
+            };
+            format!("{n} {what} over ({})", names.join(", "))
         })
         .collect();
     format!("additive: {} + the linear term", parts.join(" + "))

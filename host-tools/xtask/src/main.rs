@@ -342,7 +342,13 @@ fn smoke() -> Result<()> {
         field(&text, "instructions_per_rbf_eval=").context("no instruction count in output")?;
     let per_masked = field(&text, "instructions_per_additive_rbf_eval=")
         .context("no additive instruction count in output")?;
-    for (what, n) in [("joint", per_eval), ("additive", per_masked)] {
+    let per_kinds = field(&text, "instructions_per_kinds_rbf_eval=")
+        .context("no instruction count for the model with steps and powers in output")?;
+    for (what, n) in [
+        ("joint", per_eval),
+        ("additive", per_masked),
+        ("steps and powers", per_kinds),
+    ] {
         if n > RBF_EVAL_BUDGET {
             bail!(
                 "{what} RBF evaluation takes {n} instructions, over the budget of {RBF_EVAL_BUDGET}"
@@ -350,8 +356,8 @@ fn smoke() -> Result<()> {
         }
     }
     println!(
-        "smoke: ok, {per_eval} instructions per 32x4 RBF evaluation, {per_masked} additive \
-         (budget {RBF_EVAL_BUDGET})"
+        "smoke: ok, {per_eval} instructions per 32x4 RBF evaluation, {per_masked} additive, \
+         {per_kinds} with steps and powers (budget {RBF_EVAL_BUDGET})"
     );
     Ok(())
 }

@@ -115,8 +115,9 @@ fn fit_models(work: &Path) -> Result<()> {
         for axis in axes {
             let data = format!("{preset}/train.csv");
             let out = format!("{preset}-{axis}.tcm");
-            // The QMA's z channel is an additive model (blob format 3, per-center feature masks):
-            // T acts through a term of its own and the evidence places its Gaussians.
+            // The QMA's z channel is an additive model (blob format 4, per-center feature masks and
+            // kinds): T acts through terms of its own (its square and cube, Gaussians or steps)
+            // that the evidence places.
             let additive = preset == "qma" && *axis == "z";
             let centers: &[&str] = if additive { &[] } else { &["--centers", "32"] };
             let mut args = vec![
@@ -157,21 +158,26 @@ fn fit_models(work: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Refuses to go on unless the blob at `path` is an additive model (format 3, with masks): the
-/// run is meant to carry one through the firmware.
+/// Refuses to go on unless the blob at `path` is an additive model with terms of another kind
+/// than a Gaussian (format 4, with masks and kinds): the run is meant to carry one through the
+/// firmware.
 fn require_masks(path: &Path) -> Result<()> {
     let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
     let m = tcomp_core::HostModel::decode(&bytes)
         .map_err(|e| anyhow::anyhow!("{}: {e:?}", path.display()))?;
     anyhow::ensure!(
-        !m.rbf.masks.is_empty(),
-        "{}: the fit chose no additive structure; the QEMU run needs one",
+        !m.rbf.masks.is_empty() && !m.rbf.kinds.is_empty(),
+        "{}: the fit chose no additive structure with steps or powers; the QEMU run needs one",
         path.display()
     );
+    let count = |k: u8| m.rbf.kinds.iter().filter(|x| **x == k).count();
+    use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP};
     eprintln!(
-        "{}: additive model, {} Gaussians, format {}",
+        "{}: additive model, {} Gaussians, {} steps, {} powers, format {}",
         path.display(),
-        m.rbf.centers.len(),
+        count(KIND_GAUSSIAN),
+        count(KIND_STEP),
+        count(KIND_SQUARE) + count(KIND_CUBE),
         m.version
     );
     Ok(())

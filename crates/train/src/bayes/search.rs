@@ -481,7 +481,7 @@ impl<'o> Search<'o> {
         if let Some(a) = additive.as_ref() {
             compared.push((
                 format!("{}, AR(1) noise ρ {:.2}", self.describe(a), a.rho),
-                units(a.fit.ev.log_evidence),
+                units(self.occam(a)),
             ));
             if let Some((name, e, r)) = &pick_ev {
                 compared.push((format!("{name}, AR(1) noise ρ {r:.2}"), units(*e)));
@@ -490,7 +490,7 @@ impl<'o> Search<'o> {
         let pick_ev = pick_ev.map(|(_, e, _)| e);
         compared.sort_by(|a, b| b.1.total_cmp(&a.1));
         if let (Some(a), Some(pick_ev)) = (additive, pick_ev)
-            && a.fit.ev.log_evidence > pick_ev + margin
+            && self.occam(&a) > pick_ev + margin
             && Self::has_atoms(&a)
         {
             let (rbf, evidence) = self.additive_fit(&a);
@@ -579,6 +579,7 @@ impl<'o> Search<'o> {
             },
             bias: self.ym + ys * b0,
             masks: Vec::new(),
+            kinds: Vec::new(),
         };
         BayesFit {
             rbf,

@@ -13,6 +13,11 @@ use tcomp_core::{Channel, Model, Status};
 static BLOB: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_model.tcm"));
 /// The same model made additive (each center over one feature; blob format 3).
 static ADDITIVE: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_additive.tcm"));
+/// The same model with every kind of term: steps, Gaussians, a square and a cube (blob format 4).
+static KINDS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_kinds.tcm"));
+/// The host's output of [`KINDS`] at eight points on its range box's diagonal (f32 LE each).
+static KINDS_EXPECTED: &[u8] =
+    include_bytes!(concat!(env!("OUT_DIR"), "/smoke_kinds_expected.bin"));
 /// Per sample: anode, cathode, shell (°C), raw (deg/h), host-compensated (f32 LE), host status (u32 LE).
 static VECTOR: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_vector.bin"));
 const RECORD: usize = 24;
@@ -112,6 +117,34 @@ fn main() -> ! {
     }
     let t1 = counter.now();
     let per_additive = counter.instructions_between(t0, t1) / TIMED_EVALS;
+    // The model with every kind: bit for bit with the host at the eight points, and its cost.
+    let kinds = match Model::<'_, 32, 4, 24>::decode(KINDS) {
+        Ok(m) => m,
+        Err(e) => {
+            hprintln!("FAIL: blob with every kind rejected: {}", e);
+            exit(false)
+        }
+    };
+    let kind_points: [[f32; 4]; 8] = core::array::from_fn(|i| {
+        let mut x = [0.0f32; 4];
+        for (k, r) in kinds.ranges.iter().enumerate().take(4) {
+            x[k] = r.lo + (r.hi - r.lo) * i as f32 / 7.0;
+        }
+        x
+    });
+    let mut kinds_mismatches = 0u32;
+    for (i, x) in kind_points.iter().enumerate() {
+        if rbf_eval(&kinds, x).to_bits() != f32_at(KINDS_EXPECTED, i).to_bits() {
+            kinds_mismatches += 1;
+        }
+    }
+    let t0 = counter.now();
+    for i in 0..TIMED_EVALS {
+        let x = core::hint::black_box(&kind_points[(i & 7) as usize]);
+        sink += rbf_eval(&kinds, x);
+    }
+    let t1 = counter.now();
+    let per_kinds = counter.instructions_between(t0, t1) / TIMED_EVALS;
     let per_step = steps_instr.checked_div(steps).unwrap_or(0);
 
     hprintln!(
@@ -126,13 +159,20 @@ fn main() -> ! {
         corrupt_rejected,
         sink
     );
+    hprintln!("kinds_mismatches={}", kinds_mismatches);
     hprintln!(
-        "SMOKE-SUMMARY instructions_per_rbf_eval={} instructions_per_additive_rbf_eval={} instructions_per_channel_step={}",
+        "SMOKE-SUMMARY instructions_per_rbf_eval={} instructions_per_additive_rbf_eval={} instructions_per_kinds_rbf_eval={} instructions_per_channel_step={}",
         per_eval,
         per_additive,
+        per_kinds,
         per_step
     );
-    let ok = samples > 0 && mismatches == 0 && flagged >= 2 && corrupt_rejected && sink.is_finite();
+    let ok = samples > 0
+        && mismatches == 0
+        && kinds_mismatches == 0
+        && flagged >= 2
+        && corrupt_rejected
+        && sink.is_finite();
     let _ = Status::OK;
     hprintln!("{}", if ok { "SMOKE OK" } else { "SMOKE FAIL" });
     exit(ok)
