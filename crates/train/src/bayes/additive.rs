@@ -37,6 +37,15 @@
 //! fitted parameters then cost an Occam factor of `½ ln N` each ([`Search::occam`]), and the
 //! refinement is kept only when it pays for them.
 //!
+//! **Seen once.** A Gaussian whose support (where it is at least half its peak) the run visited
+//! in one stretch of time — the hold at the hottest temperature, a gradient only the fastest ramp
+//! reached — is left out of the dictionary. Within one visit a bump in that feature cannot be told
+//! from the noise's own drift over the visit (bias instability moves a two-hour hold's mean), and
+//! the evidence, which models the drift as AR(1) with a correlation shorter than the run's sweep,
+//! credits the bump with the hold's whole offset. A step is exempt: its two sides are compared
+//! with each other, and a drift that jumps just when the run crosses one value is not what bias
+//! instability does. The powers are global and exempt too.
+//!
 //! **Three paths.** Greedy forward selection commits to its first choices: a wide step that takes
 //! most of a smooth curve at once can shut out the Gaussians that would follow it better, and
 //! the other way round. So the search runs three times, with the Gaussians, the steps, and both
@@ -399,6 +408,15 @@ impl Search<'_> {
         }
         let dict = self.dictionary();
         let cols: Vec<DVector<f64>> = dict.par_iter().map(|a| self.column(a)).collect();
+        // A bump the run visited once is no candidate (see "Seen once" in the module doc).
+        let (dict, cols): (Vec<Atom>, Vec<DVector<f64>>) = dict
+            .into_iter()
+            .zip(cols)
+            .filter(|(a, c)| a.kind != KIND_GAUSSIAN || visits(c) > 1)
+            .unzip();
+        if dict.is_empty() && self.xmat.ncols() == 0 {
+            return None;
+        }
         let cand = DMatrix::from_columns(&cols);
         let lin = if self.opts.linear {
             self.xmat.clone()
@@ -737,6 +755,21 @@ impl Search<'_> {
     pub(super) fn has_atoms(a: &Additive) -> bool {
         !a.atoms.is_empty()
     }
+}
+
+/// How many separate times the run visited where `col` is at least half its largest value: the
+/// runs of consecutive bins in that set (bins are in time order; a gap in the record splits no
+/// run, which errs towards more visits, never fewer).
+fn visits(col: &DVector<f64>) -> usize {
+    let top = col.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let on: Vec<bool> = col
+        .iter()
+        .map(|v| v.abs() >= 0.5 * top && top > 0.0)
+        .collect();
+    on.iter()
+        .enumerate()
+        .filter(|(i, o)| **o && (*i == 0 || !on[*i - 1]))
+        .count()
 }
 
 fn geometric_mean(v: &[f64]) -> f64 {
