@@ -79,12 +79,9 @@ use crate::rbf64::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP, Rbf64};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
-/// A candidate step's width, in multiples of the narrowest Gaussian (refined later, see
-/// [`Atom::floor`]).
-const STEP_WIDTHS: [f64; 5] = [1.0, 2.0, 4.0, 8.0, 16.0];
 /// Most positions per feature in the dictionary.
 const MAX_POSITIONS: usize = 24;
-/// σ of a candidate Gaussian, in multiples of the narrowest the data resolve.
+/// σ of a candidate Gaussian (and a step's width), in multiples of the narrowest the data resolve.
 const WIDTHS: [f64; 5] = [1.0, 2.0, 4.0, 8.0, 16.0];
 /// The most Gaussians an additive model gets: the reference firmware's capacity.
 pub(super) const MAX_GAUSSIANS: usize = tcomp_core::FLIGHT_CENTERS;
@@ -110,7 +107,8 @@ pub(super) struct Atom {
     /// [`KIND_GAUSSIAN`], [`KIND_STEP`], [`KIND_SQUARE`] or [`KIND_CUBE`].
     pub(super) kind: u8,
     /// The narrowest `sigma` the refinement may reach ([`Search::refine_atom`]): the data's
-    /// resolution for a Gaussian, a 64th of it for a step (see [`STEP_WIDTHS`]).
+    /// resolution for a Gaussian, a 64th of it for a step (a step sharper than the data resolve
+    /// still has a level on each side that they pin).
     pub(super) floor: f64,
     /// Moved off the grid by [`Search::refine_atom`]: two continuous parameters fitted, whose
     /// Occam factor [`Search::occam`] charges.
@@ -231,8 +229,7 @@ impl Search<'_> {
                 });
             }
             for step in [false, true] {
-                let widths: &[f64] = if step { &STEP_WIDTHS } else { &WIDTHS };
-                for &w in widths {
+                for w in WIDTHS {
                     let sigma = w * narrowest;
                     if sigma > range {
                         break;
