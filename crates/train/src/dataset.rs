@@ -23,6 +23,7 @@ use crate::progress::{CountingReader, Progress, Silent, Unit};
 use flate2::read::MultiGzDecoder;
 use std::io::Read;
 use std::path::Path;
+use std::sync::Arc;
 
 pub mod clean;
 mod csv_read;
@@ -77,8 +78,10 @@ impl Bad {
 pub struct Dataset {
     file: String,
     names: Vec<String>,
-    cols: Vec<Vec<f64>>,
-    lines: Vec<u64>,
+    /// Shared: a fit's selection of the whole run, and every candidate refit of discovery, clones the
+    /// dataset, and the numbers never change after loading.
+    cols: Arc<Vec<Vec<f64>>>,
+    lines: Arc<Vec<u64>>,
     bad: Vec<Bad>,
     notes: Vec<String>,
 }
@@ -240,8 +243,8 @@ impl Dataset {
         Ok(Self {
             file: file.to_string(),
             names,
-            cols,
-            lines,
+            cols: Arc::new(cols),
+            lines: Arc::new(lines),
             bad,
             notes: Vec::new(),
         })
@@ -265,8 +268,8 @@ impl Dataset {
         Self {
             file: file.to_string(),
             names,
-            cols,
-            lines,
+            cols: Arc::new(cols),
+            lines: Arc::new(lines),
             bad,
             notes: Vec::new(),
         }
@@ -484,8 +487,8 @@ impl Dataset {
         Self {
             file: self.file.clone(),
             names: self.names.clone(),
-            cols,
-            lines: keep.iter().map(|&i| self.line(i)).collect(),
+            cols: Arc::new(cols),
+            lines: Arc::new(keep.iter().map(|&i| self.line(i)).collect()),
             bad,
             notes: self.notes.clone(),
         }
