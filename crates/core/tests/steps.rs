@@ -4,6 +4,8 @@
 //! every rule of the kinds' validation holds, and the plausibility bound covers a step.
 #![allow(clippy::unwrap_used, missing_docs)]
 
+mod trailing_support;
+
 use tcomp_core::blob::{KINDS_SINCE, MASKS_SINCE};
 use tcomp_core::point::Point;
 use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP, RbfError};
@@ -191,20 +193,7 @@ fn host_steps() -> HostModel<'static> {
 fn kinds_round_trip_through_both_decoders_as_format_4() {
     let m = host_steps();
     assert_eq!(m.version, KINDS_SINCE);
-    let mut buf = vec![0u8; 8192];
-    let n = m.encode(&mut buf).unwrap();
-    let bytes = &buf[..n];
-    assert_eq!(HostModel::decode(bytes).unwrap(), m);
-    let mut place = None;
-    HostModel::decode_into(bytes, &mut place).unwrap();
-    assert_eq!(place.as_ref(), Some(&m));
-    // Truncating the kinds, or adding a byte after them, is refused (after resealing the CRC).
-    for body in [&bytes[..n - 5], &[&bytes[..n - 4], &[0u8][..]].concat()[..]] {
-        let mut b = body.to_vec();
-        let crc = tcomp_core::blob::crc32(&b);
-        b.extend_from_slice(&crc.to_le_bytes());
-        assert!(HostModel::decode(&b).is_err());
-    }
+    trailing_support::round_trips_and_refuses_bad_trailing_fields(&m);
     // Steps on a format-3 model are refused rather than silently dropped.
     let mut old = m.clone();
     old.version = MASKS_SINCE;
