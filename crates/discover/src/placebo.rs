@@ -137,7 +137,7 @@ fn statistic(p: &Prepared, rho: f64, base_evidence: f64, cols: &[Vec<f64>], each
         }
         a0.resize(g + cols.len(), 1.0);
     }
-    ar1::fit(&phi, &p.y, &groups, (&a0, p.base.beta), rho)
+    ar1::fit(&phi, &p.y, &groups, (&a0, p.base.beta), rho, &[])
         .map_or(f64::NEG_INFINITY, |(_, e)| e - base_evidence)
 }
 
@@ -156,7 +156,7 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
         return;
     }
     let start = (&p.base.alpha[..], p.base.beta);
-    let Some((_, base_evidence, rho)) = ar1::fit_best_rho(&p.phi, &p.y, &p.groups, start, 1.0)
+    let Some((_, base_evidence, rho)) = ar1::fit_best_rho(&p.phi, &p.y, &p.groups, start, 1.0, &[])
     else {
         return;
     };

@@ -73,6 +73,9 @@ pub struct BayesOptions {
     pub additive: bool,
     /// Per feature, how it may enter the Gaussians ([`crate::pin`]); empty: all free.
     pub pins: Vec<crate::pin::Pin>,
+    /// The bins (row indices of `x`) where a stretch of the record after a gap begins: the AR(1)
+    /// noise model starts afresh there (see [`crate::ar1`]). Empty: one stretch.
+    pub stretches: Vec<usize>,
 }
 
 impl Default for BayesOptions {
@@ -84,6 +87,7 @@ impl Default for BayesOptions {
             names: Vec::new(),
             additive: true,
             pins: Vec::new(),
+            stretches: Vec::new(),
         }
     }
 }
@@ -244,6 +248,17 @@ pub fn fit_binned(
         None
     };
     search.choose(best, cubic, additive, margin, evaluated)
+}
+
+/// The bins where a stretch of the record begins after a gap: those whose first row is at or
+/// past a stretch's first row (`starts`, rows) that the bin before them had not reached.
+fn stretch_bins(starts: &[usize], bins: &[(usize, usize)]) -> Vec<usize> {
+    (1..bins.len())
+        .filter(|&i| {
+            let (before, here) = (bins[i - 1].0, bins[i].0);
+            starts.iter().any(|&s| s > before && s <= here)
+        })
+        .collect()
 }
 
 /// Hyperparameters and evidence of a fit to targets normalised by `ys`, back in the target's units.
@@ -450,6 +465,7 @@ impl crate::method::FitMethod for Bayes {
             names: set.spec.features.clone(),
             additive: self.additive(),
             pins: opts.pins.to_vec(),
+            stretches: stretch_bins(&set.starts, &set.bins),
         };
         let offered = cubic.as_ref().map(|c| c.rows.as_slice());
         let f = fit_binned(&set.x, &set.y, offered, Some(&set.sub_x), &bo).ok_or(

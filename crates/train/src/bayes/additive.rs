@@ -62,6 +62,8 @@
 //! ([`Search::rho_max`]): noise correlated for longer than the run takes to sweep its temperature
 //! range at its fastest rate moves like the thermal effect, and one run cannot tell them apart.
 //! Since the correlation is modelled, the margin is not grown by it as the joint search's is.
+//! A record with gaps is whitened one stretch at a time ([`crate::ar1`]): the noise after a gap
+//! does not continue the noise before it.
 //!
 //! Every term is averaged over each bin's parts ([`crate::rows::SUB_BINS`]) as the target is
 //! averaged over the bin: a 120 s bin on a 3 °C/min ramp spans 6 °C, and a Gaussian of the bin's
@@ -141,7 +143,15 @@ impl Search<'_> {
         let ng = groups.iter().max().copied().unwrap_or(0) + 1;
         let mut start = vec![1.0; ng];
         start[0] = 1e-8;
-        fit_best_rho(phi, &self.yn, groups, (&start, 10.0), self.rho_max()).map(|(_, e, r)| (e, r))
+        fit_best_rho(
+            phi,
+            &self.yn,
+            groups,
+            (&start, 10.0),
+            self.rho_max(),
+            &self.opts.stretches,
+        )
+        .map(|(_, e, r)| (e, r))
     }
 
     /// The most serial correlation the noise may claim: a noise correlated for longer than the run
@@ -330,8 +340,14 @@ impl Search<'_> {
             b0 = b;
         }
         a0[0] = 1e-8;
-        let (f, log_evidence, rho) =
-            fit_best_rho(&phi, &self.yn, &groups, (&a0, b0), self.rho_max())?;
+        let (f, log_evidence, rho) = fit_best_rho(
+            &phi,
+            &self.yn,
+            &groups,
+            (&a0, b0),
+            self.rho_max(),
+            &self.opts.stretches,
+        )?;
         // α per column.
         let col_alpha: Vec<f64> = groups
             .iter()
@@ -366,10 +382,10 @@ impl Search<'_> {
         cand: &DMatrix<f64>,
     ) -> Option<Vec<f64>> {
         let (phi, _) = self.atoms_design(lin, cur_cols);
-        let phi = whitened(&phi, cur.rho);
-        let cand = &whitened(cand, cur.rho);
+        let phi = whitened(&phi, cur.rho, &self.opts.stretches);
+        let cand = &whitened(cand, cur.rho, &self.opts.stretches);
         let mut yw = self.yn.clone();
-        whiten(yw.as_mut_slice(), cur.rho);
+        whiten(yw.as_mut_slice(), cur.rho, &self.opts.stretches);
         let beta = cur.fit.ev.beta;
         let mut a = phi.tr_mul(&phi) * beta;
         for (i, al) in cur.alpha.iter().enumerate() {
