@@ -499,6 +499,18 @@ impl crate::method::FitMethod for Bayes {
 mod tests {
     use super::*;
 
+    /// A bin starts a stretch when a gap's first row falls after the previous bin's first row and
+    /// at or before its own; the record's first bin is never listed.
+    #[test]
+    fn stretches_begin_at_the_bins_after_each_gap() {
+        // Rows 0–99 in bins of 20, a gap, rows 100–159 (the second stretch) in bins of 20.
+        let bins: Vec<(usize, usize)> = (0..8).map(|i| (20 * i, 20 * i + 20)).collect();
+        assert_eq!(stretch_bins(&[0, 100], &bins), [5]);
+        assert!(stretch_bins(&[0], &bins).is_empty());
+        // A gap inside a bin's rows starts the stretch at the next bin.
+        assert_eq!(stretch_bins(&[0, 47], &bins), [3]);
+    }
+
     /// Deterministic noise in [−0.5, 0.5).
     fn noise(i: usize) -> f64 {
         ((i * 7919 + 13) % 1009) as f64 / 1009.0 - 0.5
