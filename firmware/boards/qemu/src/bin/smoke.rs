@@ -95,13 +95,7 @@ fn main() -> ! {
         p
     });
     let mut sink = 0.0f32;
-    let t0 = counter.now();
-    for i in 0..TIMED_EVALS {
-        let x = core::hint::black_box(&points[(i & 7) as usize]);
-        sink += rbf_eval(&model, x);
-    }
-    let t1 = counter.now();
-    let per_eval = counter.instructions_between(t0, t1) / TIMED_EVALS;
+    let per_eval = per_rbf_eval(&counter, &model, &points, &mut sink);
     // The same for the additive model (masked distances).
     let additive = match Model::<'_, 32, 4, 24>::decode(ADDITIVE) {
         Ok(m) => m,
@@ -110,13 +104,7 @@ fn main() -> ! {
             exit(false)
         }
     };
-    let t0 = counter.now();
-    for i in 0..TIMED_EVALS {
-        let x = core::hint::black_box(&points[(i & 7) as usize]);
-        sink += rbf_eval(&additive, x);
-    }
-    let t1 = counter.now();
-    let per_additive = counter.instructions_between(t0, t1) / TIMED_EVALS;
+    let per_additive = per_rbf_eval(&counter, &additive, &points, &mut sink);
     // The model with every kind: bit for bit with the host at the eight points, and its cost.
     let kinds = match Model::<'_, 32, 4, 24>::decode(KINDS) {
         Ok(m) => m,
@@ -138,13 +126,7 @@ fn main() -> ! {
             kinds_mismatches += 1;
         }
     }
-    let t0 = counter.now();
-    for i in 0..TIMED_EVALS {
-        let x = core::hint::black_box(&kind_points[(i & 7) as usize]);
-        sink += rbf_eval(&kinds, x);
-    }
-    let t1 = counter.now();
-    let per_kinds = counter.instructions_between(t0, t1) / TIMED_EVALS;
+    let per_kinds = per_rbf_eval(&counter, &kinds, &kind_points, &mut sink);
     let per_step = steps_instr.checked_div(steps).unwrap_or(0);
 
     hprintln!(
@@ -176,6 +158,23 @@ fn main() -> ! {
     let _ = Status::OK;
     hprintln!("{}", if ok { "SMOKE OK" } else { "SMOKE FAIL" });
     exit(ok)
+}
+
+/// Instructions per [`rbf_eval`] of `model`, averaged over [`TIMED_EVALS`] calls cycling through
+/// `points`; each output is added to `sink` so that no call is optimised away.
+fn per_rbf_eval(
+    counter: &InstructionCounter,
+    model: &Model<'_, 32, 4, 24>,
+    points: &[[f32; 4]; 8],
+    sink: &mut f32,
+) -> u32 {
+    let t0 = counter.now();
+    for i in 0..TIMED_EVALS {
+        let x = core::hint::black_box(&points[(i & 7) as usize]);
+        *sink += rbf_eval(model, x);
+    }
+    let t1 = counter.now();
+    counter.instructions_between(t0, t1) / TIMED_EVALS
 }
 
 /// One RBF evaluation in a function of its own, so the figure measures the evaluator as the
