@@ -5,6 +5,8 @@
 //!   the QEMU smoke run with its instruction budget, and the QEMU product run (`qemu.rs`).
 //! * `cargo xtask lint` — only fmt and clippy (the first steps of `ci`).
 //! * `cargo xtask board` — only the board binary's build and sizes.
+//! * `cargo xtask targets` — the no_std build of the core and the HAL, then `board` (the target
+//!   builds of `ci`, which runs them beside the host tests).
 //! * `cargo xtask smoke` — only the QEMU smoke run.
 //! * `cargo xtask power-cut` — the model slots' power-loss test (a power cut after and inside every
 //!   write step of three updates); prints its `POWER-CUT` line, and `POWER-CUT-SIGNED` (the
@@ -44,10 +46,11 @@ fn main() -> Result<()> {
         "smoke" => smoke(),
         "qemu" => qemu::qemu(),
         "board" => board::board(),
+        "targets" => targets(),
         "power-cut" => power_cut(),
         "ffi" => ffi::ffi(),
         "python" => python::python(),
-        _ => bail!("usage: cargo xtask <ci|lint|smoke|qemu|board|power-cut|ffi|python>"),
+        _ => bail!("usage: cargo xtask <ci|lint|smoke|qemu|board|targets|power-cut|ffi|python>"),
     }
 }
 
@@ -175,7 +178,15 @@ fn lint_steps(steps: &mut Steps) -> Result<()> {
 fn ci() -> Result<()> {
     let mut steps = Steps(Vec::new());
     lint_steps(&mut steps)?;
+    // The test build, then the tests beside the target builds: the tests keep about 1.6 of the
+    // two cores busy, and the release builds for thumbv7em (their own profile and target, so
+    // cargo's lock does not serialise them with the tests) take most of the rest.
+    steps.run("test_build", host_build)?;
+    let mut targets = Command::new(std::env::current_exe()?);
+    targets.arg("targets");
+    let targets = Lane::start("targets", targets)?;
     steps.run("test", || cargo(&[&["test"][..], &HOST_TESTS].concat()))?;
+    steps.run("targets", || targets.finish())?;
     // The Python step (a wheel built by maturin with its own feature set, packages from PyPI,
     // pytest) shares nothing with the steps below but the test build's `tcomp` binary, and the
     // steps below spend most of their time in QEMU on one core: it runs beside them, in a child
@@ -184,6 +195,16 @@ fn ci() -> Result<()> {
     python.arg("python");
     let python = Lane::start("python", python)?;
     steps.run("power_cut", power_cut)?;
+    steps.run("smoke", smoke)?;
+    steps.run("qemu", qemu::qemu)?;
+    steps.run("ffi", ffi::ffi)?;
+    steps.run("python", || python.finish())
+}
+
+/// `cargo xtask targets`: the no_std build of the core and the HAL for the Cortex-M4F, then the
+/// STM32F407 board binary with its size budgets; each step's time printed as in `ci`.
+fn targets() -> Result<()> {
+    let mut steps = Steps(Vec::new());
     steps.run("no_std_core_hal", || {
         cargo(&[
             "build",
@@ -196,11 +217,7 @@ fn ci() -> Result<()> {
             "--release",
         ])
     })?;
-    steps.run("board", board::board)?;
-    steps.run("smoke", smoke)?;
-    steps.run("qemu", qemu::qemu)?;
-    steps.run("ffi", ffi::ffi)?;
-    steps.run("python", || python.finish())
+    steps.run("board", board::board)
 }
 
 /// A step run beside the others: a child process (bounded by [`CARGO_LIMIT`], killed when
