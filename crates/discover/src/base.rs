@@ -5,6 +5,7 @@
 //! Why apart from [`crate::score`]: every candidate is scored against this one base (see the
 //! reasons there); preparing it is a job of its own, done once per diagnosis.
 
+use crate::column_cache::ColumnCache;
 use crate::design::{Columns, Transform, compute_binned, error_of, floor_estimate, hcat, mean_sd};
 use crate::error::{DiscoverError, Result};
 use nalgebra::{DMatrix, DVector};
@@ -115,6 +116,9 @@ pub struct Prepared {
     pub(crate) gap_s: Option<f64>,
     /// Base figures.
     pub figures: BaseFigures,
+    /// Binned columns computed on the training run, and on the verification run.
+    train_cols: ColumnCache,
+    verify_cols: ColumnCache,
 }
 
 /// Figures of the base model under the scoring machinery.
@@ -228,6 +232,8 @@ pub fn prepare(
         heldout,
         gap_s: opts.gap_s,
         figures: BaseFigures::default(),
+        train_cols: ColumnCache::default(),
+        verify_cols: ColumnCache::default(),
     };
     p.figures = base_figures(&p, opts, tr.rbf.centers.len())?;
     Ok(p)
@@ -421,14 +427,16 @@ impl Prepared {
 
     /// The binned training columns of `exprs`, as they are (not standardised).
     pub(crate) fn binned(&self, exprs: &[String]) -> Result<Columns> {
-        compute_binned(
-            &self.signals,
-            exprs,
-            &self.data,
-            &self.time,
-            &self.starts,
-            &self.tbins,
-        )
+        self.train_cols.columns(exprs, |missing| {
+            compute_binned(
+                &self.signals,
+                missing,
+                &self.data,
+                &self.time,
+                &self.starts,
+                &self.tbins,
+            )
+        })
     }
 
     /// Standardised training columns only (what a search over many members scores with).
@@ -449,15 +457,7 @@ impl Prepared {
 
     /// Standardised training columns and, with a verification run, its columns.
     pub(crate) fn standardised(&self, exprs: &[String]) -> Result<(Columns, Option<Columns>)> {
-        let time_col = self.time.clone();
-        let cols = compute_binned(
-            &self.signals,
-            exprs,
-            &self.data,
-            &time_col,
-            &self.starts,
-            &self.tbins,
-        )?;
+        let cols = self.binned(exprs)?;
         let stats: Vec<(f64, f64)> = cols.iter().map(|c| mean_sd(c)).collect();
         let z = |cols: Vec<Vec<f64>>| -> Vec<Vec<f64>> {
             cols.into_iter()
@@ -475,14 +475,9 @@ impl Prepared {
         let v = match &self.heldout {
             HeldOut::Verify {
                 data, bins, starts, ..
-            } => Some(z(compute_binned(
-                &self.signals,
-                exprs,
-                data,
-                &time_col,
-                starts,
-                bins,
-            )?)),
+            } => Some(z(self.verify_cols.columns(exprs, |missing| {
+                compute_binned(&self.signals, missing, data, &self.time, starts, bins)
+            })?)),
             HeldOut::Blocks(_) => None,
         };
         Ok((z(cols), v))
@@ -491,14 +486,7 @@ impl Prepared {
 
 /// Binned values of `expr` on the training data (for plots of residual against a candidate).
 pub fn binned_feature(p: &Prepared, expr: &str) -> Result<Vec<f64>> {
-    let cols = compute_binned(
-        &p.signals,
-        &[expr.to_string()],
-        &p.data,
-        &p.time,
-        &p.starts,
-        &p.tbins,
-    )?;
+    let cols = p.binned(&[expr.to_string()])?;
     Ok(cols.into_iter().next().unwrap_or_default())
 }
 

@@ -8,7 +8,8 @@
 //! [`dynamics`] (through how many lags, and which, the residual responds to each input),
 //! [`compose`] (the language's functions composed over every input, for effects no family lists),
 //! [`score`] (refit with each candidate in parallel: Δ log evidence and held-out residual, against
-//! the base model `base` prepares once from the columns and transform of `design`),
+//! the base model `base` prepares once from the columns and transform of `design`, each
+//! expression's column computed once per run, `column_cache`),
 //! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`confirm`] (the
 //! leading candidates refitted by the trainer), [`placebo`] (each against its own columns shifted
 //! in time, under AR(1) noise; what both found, `findings`), [`verdict`] (the stated criterion: a missing effect, "cannot tell"
@@ -28,6 +29,7 @@
 
 mod base;
 pub mod candidates;
+mod column_cache;
 pub mod compose;
 pub mod confirm;
 mod design;
