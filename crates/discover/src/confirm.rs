@@ -43,6 +43,11 @@ pub struct ConfirmOptions {
     pub heldout_bin_s: f64,
     /// Contiguous blocks of the training run when there is no verification run.
     pub folds: usize,
+    /// Where the training run's evidence is flat in a leading family's parameter, choose it by
+    /// cross-validation over the blocks ([`crate::param::estimate`]; five refits per block). A
+    /// production line's diagnosis turns it off (`tcomp calibrate`: a third of its time) and
+    /// takes the evidence's maximum, as it is reported beside the flat interval.
+    pub cross_validate: bool,
 }
 
 impl Default for ConfirmOptions {
@@ -51,6 +56,7 @@ impl Default for ConfirmOptions {
             top: 5,
             heldout_bin_s: 100.0,
             folds: 5,
+            cross_validate: true,
         }
     }
 }
@@ -154,7 +160,13 @@ impl<'a> Refits<'a> {
 
     /// Estimates the parameter of a searched candidate (see [`crate::param`]) and moves the
     /// candidate to the estimate.
-    fn estimate(&self, c: &mut Scored, prepared: &Prepared, blocks: &[Split]) {
+    fn estimate(
+        &self,
+        c: &mut Scored,
+        prepared: &Prepared,
+        blocks: &[Split],
+        cross_validate: bool,
+    ) {
         let Some(search) = c.search.clone() else {
             return;
         };
@@ -174,6 +186,9 @@ impl<'a> Refits<'a> {
             )
         };
         let heldout = |p: f64| {
+            if !cross_validate {
+                return None;
+            }
             heldout_std(
                 self,
                 blocks,
@@ -439,7 +454,7 @@ pub fn confirm(
         .collect();
     leading
         .par_iter_mut()
-        .for_each(|c| refits.estimate(c, prepared, &blocks));
+        .for_each(|c| refits.estimate(c, prepared, &blocks, opts.cross_validate));
     for (&i, c) in order.iter().zip(leading) {
         if let Some(slot) = cands.get_mut(i) {
             *slot = c;
