@@ -216,6 +216,11 @@ pub fn prepare(
     let base = evidence::fit(&phi, &y, &groups, None)
         .ok_or_else(|| DiscoverError::Invalid("the base design is singular".into()))?;
     let heldout = held_out(spec, roles, verify, opts, &tr, n)?;
+    let train_cols = ColumnCache::for_run(&starts);
+    let verify_cols = match &heldout {
+        HeldOut::Verify { starts, .. } => ColumnCache::for_run(starts),
+        HeldOut::Blocks(_) => ColumnCache::for_run(&[]),
+    };
     let mut p = Prepared {
         data: data.clone(),
         time: roles.time.clone(),
@@ -232,8 +237,8 @@ pub fn prepare(
         heldout,
         gap_s: opts.gap_s,
         figures: BaseFigures::default(),
-        train_cols: ColumnCache::default(),
-        verify_cols: ColumnCache::default(),
+        train_cols,
+        verify_cols,
     };
     p.figures = base_figures(&p, opts, tr.rbf.centers.len())?;
     Ok(p)

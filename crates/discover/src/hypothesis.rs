@@ -70,7 +70,8 @@ impl Candidate {
 /// How a candidate was read off the data, when not by a template's parameter.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub enum Searched {
-    /// Not read off the data: a plain candidate, or a template's family ([`Family::search`]).
+    /// Not read off the data: a plain candidate, or a template's family
+    /// ([`crate::families::Family::search`]).
     #[default]
     No,
     /// Read off a bank of columns by automatic relevance determination ([`crate::dynamics`]).

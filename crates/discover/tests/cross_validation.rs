@@ -1,35 +1,20 @@
 //! A production line's diagnosis (`tcomp calibrate`) leaves a flat parameter at the evidence's
-//! maximum: `ConfirmOptions::cross_validate` off, no estimate is chosen by cross-validation,
-//! and the same run diagnosed by default is (so the switch is what changed it).
+//! maximum: with `ConfirmOptions::cross_validate` off no estimate is chosen by cross-validation,
+//! and the same run diagnosed by default has some that are (so the switch is what changed them).
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use tcomp_demo::simulated;
+mod support;
+use support::*;
 use tcomp_discover::param::ChosenBy;
-use tcomp_discover::{DiagnoseOptions, diagnose};
-use tcomp_sim::presets;
-use tcomp_train::FitOptions;
 
-fn chosen_by(seed: u64, cross_validate: bool) -> Vec<ChosenBy> {
-    let sim = simulated(&presets::preset("qma").unwrap().with_seed(seed)).unwrap();
-    let truth = &sim.train_truth;
-    let feats: Vec<&str> = truth
-        .true_features
-        .features
-        .iter()
-        .map(String::as_str)
-        .collect();
-    let mut o = FitOptions::new(&truth.columns.target, &feats);
-    o.reference = Some(truth.columns.reference.clone());
-    let fitted = tcomp_train::fit(&sim.train, &o).unwrap();
-    let bytes = fitted.model.to_bytes().unwrap();
-    let model = tcomp_train::blob_io::decode("m.tcm".as_ref(), &bytes).unwrap();
-    let mut opts = DiagnoseOptions {
-        compose: false,
-        ..DiagnoseOptions::default()
-    };
+/// How each estimated parameter was chosen, on the QMA preset's training run (the listed
+/// effects, no verification run: as `tcomp calibrate` diagnoses a channel).
+fn chosen_by(cross_validate: bool) -> Vec<ChosenBy> {
+    let mut case = base_case(presets::preset("qma").unwrap().with_seed(0), &[]);
+    case.compose = false;
+    let mut opts = options(&case);
     opts.confirm.cross_validate = cross_validate;
-    let a = diagnose(&model, &sim.train, None, &opts).unwrap();
-    a.diagnosis
+    diagnosis(&case, false, &opts)
         .candidates
         .iter()
         .filter_map(|c| c.estimate.as_ref().map(|e| e.chosen_by))
@@ -38,12 +23,12 @@ fn chosen_by(seed: u64, cross_validate: bool) -> Vec<ChosenBy> {
 
 #[test]
 fn a_line_leaves_a_flat_parameter_at_the_evidence_maximum() {
-    let by_default = chosen_by(0, true);
+    let by_default = chosen_by(true);
     assert!(
         by_default.contains(&ChosenBy::CrossValidation),
         "{by_default:?}"
     );
-    let on_a_line = chosen_by(0, false);
+    let on_a_line = chosen_by(false);
     assert!(!on_a_line.is_empty());
     assert!(
         !on_a_line.contains(&ChosenBy::CrossValidation),

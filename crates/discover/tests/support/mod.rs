@@ -4,6 +4,7 @@
 //! the exact truth form.
 #![allow(
     dead_code,
+    unused_imports,
     clippy::unwrap_used,
     clippy::expect_used,
     clippy::panic,
@@ -252,22 +253,22 @@ pub fn describe(case: &Case, d: &Diagnosis) -> String {
     text
 }
 
-pub fn run(case: &Case) -> Outcome {
+/// The diagnosis of the model of `case.base` (through its blob, as a user's) with `opts`, on the
+/// training run and, when `verify`, the verification run.
+pub fn diagnosis(case: &Case, verify: bool, opts: &DiagnoseOptions) -> Diagnosis {
     let fitted = fit(case, &case.base);
     let bytes = fitted.model.to_bytes().unwrap();
     let model = tcomp_train::blob_io::decode("m.tcm".as_ref(), &bytes).unwrap();
-    let a = diagnose(
-        &model,
-        &case.sim.train,
-        Some(&case.sim.verify),
-        &options(case),
-    )
-    .unwrap();
-    let text = describe(case, &a.diagnosis);
-    Outcome {
-        diagnosis: a.diagnosis,
-        text,
-    }
+    let held_out = verify.then_some(&case.sim.verify);
+    diagnose(&model, &case.sim.train, held_out, opts)
+        .unwrap()
+        .diagnosis
+}
+
+pub fn run(case: &Case) -> Outcome {
+    let diagnosis = diagnosis(case, true, &options(case));
+    let text = describe(case, &diagnosis);
+    Outcome { diagnosis, text }
 }
 
 /// Asserts the named effect and the figures after adding it; returns the ratio after.
