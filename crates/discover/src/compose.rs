@@ -34,11 +34,17 @@
 //!   leaders are re-scored on every row (a bin mean smooths a noisy input before a relay sees
 //!   it) and the best refined by golden-section sweeps ([`crate::param::golden`]).
 //! - **Parameters estimated jointly**: a depth-two shape keeps its inner shape's parameters
-//!   free. Its grid holds them at the inner estimate and a quarter of their range either way, and
-//!   the refinement sweeps them with the outer ones: the lag that best explains the residual
-//!   alone is not the lag in front of a rate or a relay (measured: `rate(lag(supply_v, 600))`
-//!   was named `supply_v` and then `cannot tell`, 7.5× the floor, with the inner lag held; found
-//!   as `lag(rate(supply_v, 64), 480)`, 1.41×, with it free).
+//!   free. Its grid holds them at the inner estimate and a quarter of their range either way,
+//!   beside a coarse grid over all its parameters together, and the refinement sweeps them with
+//!   the outer ones: the lag that best explains the residual alone is not the lag in front of a
+//!   rate or a relay (measured: `rate(lag(supply_v, 600))` was named `supply_v` and then `cannot
+//!   tell`, 7.5× the floor, with the inner lag held; found as `lag(rate(supply_v, 64), 480)`,
+//!   1.41×, with it free), and a relay alone switches at other points than a relay in front of a
+//!   lag (`lag(hyst(supply_v − 28.2, 0.2), 600)` was named `lag(clamp(supply_v, 27.9, 28.4),
+//!   580)`, 1.98× the floor, from the starts around the relay alone's wider band, 28.4 ± 0.65;
+//!   found exactly, 1.01×, with the joint grid). The joint grid is laid where the inner shape
+//!   has two parameters or more (one inner parameter is reached from the starts) and the whole
+//!   shape at most [`JOINT_PARAMS`] (8 positions each).
 //! - **One shape, one name**: the language's linear time-invariant filters (measured like the
 //!   shift: `f(3x) = 3 f(x)` and `f(x + c) − f(x)` constant; `lag` and `rate`) commute, so a chain
 //!   of them is one shape in any order ([`signature`]).
@@ -53,7 +59,11 @@
 //! seeds, and a lag hidden in a gappy log was named as a kink of the lag). A temperature's rate
 //! is not a temperature, though: memoryless functions of a rate are composed (`abs(rate(T))`, a
 //! bias the same on heating and cooling, was pruned as a curve shape and missed, 7.2× the floor).
-//! Pruned by evidence: only the [`BEAM`] best depth-one shapes are composed again, and only the
+//! Pruned by evidence: only the [`BEAM`] best depth-one shapes are composed again — and beside
+//! them the [`PER_OPERAND`] best over each non-thermal input, so that one input's shapes (or an
+//! idle column's) cannot fill the beam alone (measured: `lag(abs(supply_v − 28.1), 900)` was
+//! never composed, `abs(supply_v − 28.1)` seventh behind a relay on the supply and four shapes of
+//! an idle heater column; with it, the lag of it led the depth-two search by 77 nats) — and only the
 //! [`PROPOSED`] best shapes that no listed family already covers are handed on. They are then
 //! scored, refitted, placebo-tested — each placebo the best of the same shape's members on the
 //! shifted columns ([`crate::candidates::Searched::Alternatives`]), since the candidate is the best
@@ -66,8 +76,8 @@
 //! Measured (`tests/composed.rs`, `tests/false_discoveries.rs`, BENCHMARKS.md): a mode hop, a
 //! relay on a supply voltage and a saturating supply are named with their parameters exactly,
 //! the rate of a lagged input as a lagged rate, the size of a temperature's rate; an input times
-//! a rate, a lagged rate (named as the lag it equals with the model's own `T`), a narrow mode hop,
-//! a lagged relay and the rate of a saturating input are not yet.
+//! a rate, a lagged rate (named as the lag it equals with the model's own `T`), a narrow mode hop
+//! and the rate of a saturating input are not yet.
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
@@ -81,6 +91,8 @@ use tcomp_train::features::{self, FeatureSpec};
 
 /// Depth-one shapes composed again.
 pub const BEAM: usize = 6;
+/// Depth-one shapes of each operand composed again beside the beam.
+pub const PER_OPERAND: usize = 2;
 /// Composed candidates handed on to scoring.
 pub const PROPOSED: usize = 4;
 /// How many times the beam's width of the coarse screen's best shapes are re-scored on every row.
@@ -516,6 +528,15 @@ const STARTS: usize = 4;
 
 /// `shape` searched on the coarse screen: its grid, then the [`STARTS`] best points refined.
 fn coarse(screen: &Screen<'_>, shape: &Shape) -> Option<Found> {
+    // A depth-two shape's grid spans its inner parameters too, beside the starts at the inner
+    // estimate: a relay in front of a lag switches at other points than the relay alone.
+    let joint = if shape.inner.as_ref().is_some_and(|f| f.shape.params() >= 2)
+        && shape.params() <= JOINT_PARAMS
+    {
+        grid(shape.params())
+    } else {
+        Vec::new()
+    };
     let mut pts: Vec<Found> = inner_starts(shape)
         .iter()
         .flat_map(|start| {
@@ -523,6 +544,7 @@ fn coarse(screen: &Screen<'_>, shape: &Shape) -> Option<Found> {
                 .into_iter()
                 .map(move |g| start.iter().copied().chain(g).collect::<Vec<f64>>())
         })
+        .chain(joint)
         .map(|u| {
             let gain = screen.gain_coarse(&shape.build(&u));
             Found {
@@ -563,6 +585,9 @@ fn inner_starts(shape: &Shape) -> Vec<Vec<f64>> {
     }
     out
 }
+
+/// The most parameters a depth-two shape's joint grid spans (8 positions each: 512 points).
+const JOINT_PARAMS: usize = 3;
 
 /// How far [`inner_starts`] moves an inner parameter (a fraction of its range).
 const INNER_MOVE: f64 = 0.25;
@@ -860,7 +885,8 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
         });
     }
     let mut among = shapes.len();
-    let first = best(&screen, shapes, BEAM);
+    let inputs: HashSet<String> = src.inputs.iter().cloned().collect();
+    let first = best(&screen, shapes, BEAM, (PER_OPERAND, &inputs));
 
     // Depth two: every function over the best, and their products with every atom.
     let mut next: Vec<Shape> = Vec::new();
@@ -908,7 +934,7 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
         .map(|f| f.gain)
         .fold(f64::NEG_INFINITY, f64::max);
     among += next.len();
-    let mut second = best(&screen, next, BEAM);
+    let mut second = best(&screen, next, BEAM, (0, &HashSet::new()));
     // A composition earns its second operator only by explaining more than the best single one.
     second.retain(|f| f.gain > floor + EARN_NATS);
 
@@ -921,8 +947,14 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
     all.iter().map(|f| family(f, src, among)).collect()
 }
 
-/// The `keep` best of `shapes`: each on its coarse grid, the best refined.
-fn best(screen: &Screen<'_>, shapes: Vec<Shape>, keep: usize) -> Vec<Found> {
+/// The `keep` best of `shapes`, and beside them the `per_operand` best over each operand of
+/// `diverse`: each on its coarse grid, the best refined.
+fn best(
+    screen: &Screen<'_>,
+    shapes: Vec<Shape>,
+    keep: usize,
+    (per_operand, diverse): (usize, &HashSet<String>),
+) -> Vec<Found> {
     let mut found: Vec<Found> = shapes
         .par_iter()
         .filter_map(|s| coarse(screen, s))
@@ -930,12 +962,33 @@ fn best(screen: &Screen<'_>, shapes: Vec<Shape>, keep: usize) -> Vec<Found> {
     found.sort_by(|a, b| b.gain.total_cmp(&a.gain));
     // The bins' mean rows smooth a noisy input before a relay or a clamp sees it: the coarse
     // screen's leaders are re-scored on every row before the beam is cut.
-    found.truncate(RESCORED * keep);
-    found
-        .par_iter_mut()
+    let operand = |f: &Found| f.shape.operand.as_ref().map(Expr::to_string);
+    let allowance = |f: &Found| {
+        operand(f)
+            .filter(|o| diverse.contains(o))
+            .map_or(0, |_| per_operand)
+    };
+    let mut kept: Vec<Found> = Vec::new();
+    let mut per: std::collections::HashMap<Option<String>, usize> = Default::default();
+    for (i, f) in found.into_iter().enumerate() {
+        let n = per.entry(operand(&f)).or_default();
+        *n += 1;
+        if i < RESCORED * keep || *n <= allowance(&f) {
+            kept.push(f);
+        }
+    }
+    kept.par_iter_mut()
         .for_each(|f| f.gain = screen.gain(&f.expr()));
-    found.sort_by(|a, b| b.gain.total_cmp(&a.gain));
-    found.truncate(keep);
+    kept.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+    let mut per: std::collections::HashMap<Option<String>, usize> = Default::default();
+    let mut found = Vec::new();
+    for f in kept {
+        let n = per.entry(operand(&f)).or_default();
+        *n += 1;
+        if found.len() < keep || *n <= allowance(&f) {
+            found.push(f);
+        }
+    }
     found
         .into_par_iter()
         .map(|f| refine(f, |e| screen.gain(e)))
