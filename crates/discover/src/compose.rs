@@ -76,8 +76,8 @@
 //! Measured (`tests/composed.rs`, `tests/false_discoveries.rs`, BENCHMARKS.md): a mode hop, a
 //! relay on a supply voltage and a saturating supply are named with their parameters exactly,
 //! the rate of a lagged input as a lagged rate, the size of a temperature's rate; an input times
-//! a rate, a lagged rate (named as the lag it equals with the model's own `T`), a narrow mode hop
-//! and the rate of a saturating input are not yet.
+//! a rate, a lagged rate (named as the lag it equals with the model's own `T`), a narrow mode hop,
+//! a saturating gradient and a saturating lagging element are not yet.
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};

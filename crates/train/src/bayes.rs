@@ -76,6 +76,9 @@ pub struct BayesOptions {
     /// The bins (row indices of `x`) where a stretch of the record after a gap begins: the AR(1)
     /// noise model starts afresh there (see [`crate::ar1`]). Empty: one stretch.
     pub stretches: Vec<usize>,
+    /// The basis pinned: `Cubic` takes the cubic whenever it is offered, `Gaussians` is the
+    /// search without it (the caller offers none); `None`: the evidence chooses.
+    pub basis: Option<Basis>,
 }
 
 impl Default for BayesOptions {
@@ -88,6 +91,7 @@ impl Default for BayesOptions {
             additive: true,
             pins: Vec::new(),
             stretches: Vec::new(),
+            basis: None,
         }
     }
 }
@@ -235,19 +239,22 @@ pub fn fit_binned(
     let grid = search.grid();
     let mut best = search.first_scan(&grid, &mut evaluated)?;
     let margin = search.margin(&best);
-    if best.m > 0 {
-        best = search.refine(best, margin, &mut evaluated)?;
-    }
-    best = search.other_centers(&grid, best, &mut evaluated)?;
     // The cubic in the first feature, when offered: one candidate of its own basis.
     let cubic = cubic.and_then(|p| cubic_candidate(&search.xmat, p, &search.yn));
     evaluated += usize::from(cubic.is_some());
-    let additive = if opts.additive {
+    let pinned = opts.basis == Some(Basis::Cubic) && cubic.is_some();
+    if !pinned {
+        if best.m > 0 {
+            best = search.refine(best, margin, &mut evaluated)?;
+        }
+        best = search.other_centers(&grid, best, &mut evaluated)?;
+    }
+    let additive = if opts.additive && opts.basis.is_none() {
         search.additive(&mut evaluated)
     } else {
         None
     };
-    search.choose(best, cubic, additive, margin, evaluated)
+    search.choose(best, cubic, additive, margin, evaluated, pinned)
 }
 
 /// The bins where a stretch of the record begins after a gap: those whose first row is at or
@@ -389,6 +396,11 @@ crate::layer! {
             arg(long = "no-additive", num_args = 0, default_missing_value = "false")
         )]
         pub additive: Option<bool>,
+        /// Pin bayes's basis instead of letting the evidence choose it: `cubic` (the cubic in the
+        /// first feature, no Gaussians) or `gaussians` (the Gaussian search, no cubic); the
+        /// additive structure is not offered beside a pinned basis. Spec key `basis`.
+        #[cfg_attr(feature = "cli", arg(long))]
+        pub basis: Option<String>,
     }
 }
 
@@ -403,9 +415,15 @@ impl Bayes {
         self.cubic.unwrap_or(true)
     }
 
-    /// Whether the additive structure is offered beside the joint model [default: yes].
+    /// Whether the additive structure is offered beside the joint model [default: yes, unless a
+    /// basis is pinned].
     pub fn additive(&self) -> bool {
-        self.additive.unwrap_or(true)
+        self.additive.unwrap_or(true) && self.basis.is_none()
+    }
+
+    /// The basis pinned (`basis`), if any.
+    pub fn basis(&self) -> Result<Option<Basis>, crate::error::TrainError> {
+        self.basis.as_deref().map(str::parse).transpose()
     }
 }
 
@@ -444,7 +462,22 @@ impl crate::method::FitMethod for Bayes {
         _progress: &dyn crate::progress::Progress,
     ) -> Result<crate::method::MethodFit, crate::error::TrainError> {
         let first_free = opts.pins.first() != Some(&crate::pin::Pin::Linear);
-        let cubic = if self.linear() && self.cubic() && opts.centers.is_none() && first_free {
+        let basis = self.basis()?;
+        let offer = match basis {
+            Some(Basis::Gaussians) => false,
+            Some(Basis::Cubic) => {
+                if !(self.linear() && opts.centers.is_none() && first_free) {
+                    return Err(crate::error::TrainError::MethodNeeds {
+                        method: "bayes with basis = cubic",
+                        what: "the linear term, the number of centers left to the evidence and \
+                               the first feature not pinned linear",
+                    });
+                }
+                true
+            }
+            None => self.cubic(),
+        };
+        let cubic = if self.linear() && offer && opts.centers.is_none() && first_free {
             let time = set.data.time(opts.time)?;
             crate::cubic::cubic_basis(
                 &set.spec,
@@ -466,7 +499,14 @@ impl crate::method::FitMethod for Bayes {
             additive: self.additive(),
             pins: opts.pins.to_vec(),
             stretches: stretch_bins(&set.starts, &set.bins),
+            basis,
         };
+        if basis == Some(Basis::Cubic) && cubic.is_none() {
+            return Err(crate::error::TrainError::MethodNeeds {
+                method: "bayes with basis = cubic",
+                what: "a cubic in the first feature that the firmware's program can hold",
+            });
+        }
         let offered = cubic.as_ref().map(|c| c.rows.as_slice());
         let f = fit_binned(&set.x, &set.y, offered, Some(&set.sub_x), &bo).ok_or(
             crate::error::TrainError::FitFailed {

@@ -179,6 +179,21 @@ pub struct StructureReport {
     pub compared: Vec<(String, f64)>,
 }
 
+impl FromStr for Basis {
+    type Err = TrainError;
+    fn from_str(s: &str) -> Result<Self, TrainError> {
+        match s {
+            "gaussians" => Ok(Self::Gaussians),
+            "cubic" => Ok(Self::Cubic),
+            _ => Err(TrainError::Unknown {
+                what: "basis",
+                name: s.into(),
+                known: "cubic, gaussians".into(),
+            }),
+        }
+    }
+}
+
 /// How the traditional RBF places its centers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]

@@ -426,6 +426,7 @@ impl<'o> Search<'o> {
         additive: Option<Additive>,
         margin: f64,
         evaluated: usize,
+        cubic_pinned: bool,
     ) -> Option<BayesFit> {
         let n = self.n();
         let per: Vec<Candidate> = self
@@ -438,9 +439,12 @@ impl<'o> Search<'o> {
             .as_ref()
             .map_or(ev(&best.fit), |c| ev(&best.fit).max(ev(&c.fit)));
         let gauss_top = ev(&best.fit);
-        let linear_only = per.iter().find(|c| c.m == 0 && ev(&c.fit) >= top - margin);
-        let choose_cubic =
-            linear_only.is_none() && cubic.as_ref().is_some_and(|c| ev(&c.fit) >= top - margin);
+        let linear_only = per
+            .iter()
+            .find(|c| c.m == 0 && ev(&c.fit) >= top - margin)
+            .filter(|_| !cubic_pinned);
+        let choose_cubic = cubic_pinned
+            || linear_only.is_none() && cubic.as_ref().is_some_and(|c| ev(&c.fit) >= top - margin);
         // The structures compared, in target units, for the report.
         let units = |e: f64| e - n as f64 * self.ys.ln();
         let d = self.d();
