@@ -263,6 +263,32 @@ scenarios! {
     a_lagged_mode_hop: "lagged mode hop", Qma, [Poly], 75, "lag(hyst(t_qma_c - 10, 5), 600)", 6.0, false, 0.25;
 }
 
+// A fourth held-out set (2026-11-29): kinds no earlier scenario has, written after the held-out
+// refits were pinned to the whole run's basis, and run once (in the workspace's test profile): 1
+// of 5 named with its shape; figures in BENCHMARKS.md.
+scenarios! {
+    /// First run: named `lag(hyst(t_cathode_c - t_shell_c, 1.9), 420)` — the wrong gradient and
+    /// shape — on the training blocks' −32 %, while on the verification run it changes nothing
+    /// (−0.2 %): 8.67× where the truth form reaches 1.00× (the trainer told the truth: 1.00×).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    the_square_of_a_gradients_rate: "square of a gradient's rate", Rlg, [Poly], 81, "sq(rate(t_anode_c - t_shell_c))", 6.0, false, 0.25;
+    /// First run: "cannot tell" between `(t_anode_c - t_shell_c) * rate(T, 53)` (the truth's
+    /// shape, with T for the shell) and the gradient's own family, their refits 0.9 nats apart:
+    /// 6.97× with neither added, where the truth form reaches 1.04× (told: 1.07×).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    a_gradient_times_a_rate: "gradient × rate", Rlg, [Poly], 82, "(t_anode_c - t_shell_c) * rate(t_shell_c)", 6.0, false, 0.25;
+    /// First run: named `lag(hyst(supply_v - 28, 0), 1400)` — a step of the supply where the
+    /// truth saturates over 0.5 V, through a longer lag — 1.08× where the truth form reaches
+    /// 1.06×: the figure is met, the shape is not.
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    a_lagged_saturating_input: "lagged saturating input", Qma, [Poly], 83, "lag(clamp(supply_v, 27.8, 28.3), 1200)", 6.0, true, 0.25;
+    a_relay_on_a_second_input: "relay on a second input", Qma, [Poly], 84, "hyst(heater_v - 12.1, 0.15)", 6.0, true, 0.25;
+    /// First run: named `warmup(2000)`, one time constant for the two in series: 1.32× where the
+    /// truth form reaches 0.97× (told: 0.97×).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    a_lagged_warm_up: "lagged warm-up", Qma, [Poly], 85, "lag(warmup(600), 1200)", 6.0, false, 0.25;
+}
+
 #[test]
 fn shapes_and_numbers_are_read() {
     assert_eq!(shape("hyst(t_qma_c - 35.5, 6)"), "hyst(t_qma_c-#)");
