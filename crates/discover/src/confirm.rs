@@ -652,9 +652,8 @@ pub(crate) fn refit_placebos(
     let refits = Refits::new(info, roles, &extended, gap_s);
     // Each placebo is judged in the basis the candidate's whole-run refit chose, as the candidate
     // was (one refit, where a choice per placebo would cost one each).
-    let (_, basis) = Refits::new(info, roles, data, gap_s).whole(
-        &Refits::new(info, roles, data, gap_s).features(Some(c)),
-    );
+    let on_run = Refits::new(info, roles, data, gap_s);
+    let (_, basis) = on_run.whole(&on_run.features(Some(c)));
     let before = k.residual_std_before;
     let placebos_pct: Vec<f64> = sets
         .par_iter()
