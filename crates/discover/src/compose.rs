@@ -74,10 +74,13 @@
 //! ([`crate::placebo`]).
 //!
 //! Measured (`tests/composed.rs`, `tests/false_discoveries.rs`, BENCHMARKS.md): a mode hop, a
-//! relay on a supply voltage and a saturating supply are named with their parameters exactly,
-//! the rate of a lagged input as a lagged rate, the size of a temperature's rate; an input times
-//! a rate, a lagged rate (named as the lag it equals with the model's own `T`), a narrow mode hop,
-//! a saturating gradient and a saturating lagging element are not yet.
+//! relay on a supply voltage or a second input, a saturating supply, a lagged relay and a relay
+//! on a lagged supply are named with their parameters exactly; the rate of a lagged input as a
+//! lagged rate, the size of a temperature's rate, the rate of a saturating supply, a lagged
+//! V-shaped supply. Not yet: an input times a rate, a lagged rate (named as the lag it equals
+//! with the model's own `T`), a narrow mode hop, a saturating gradient, a saturating lagging
+//! element, a lagged mode hop, a lagged warm-up (named as one warm-up), and the square of a
+//! gradient's rate (a relay on another gradient was named: a wrong effect).
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
