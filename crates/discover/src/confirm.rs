@@ -581,9 +581,8 @@ pub fn confirm(
                 // With blocks, a real effect lowers the residual in most of them; a pooled gain that
                 // one block carries is more likely that block's drift. Only the blocks where the
                 // candidate moves vote (see `voting_blocks`).
-                c.unconfirmed = (figures.each.len() > 1 && 2 * splits_improved <= n).then(|| {
-                    format!("lowers the held-out residual in only {splits_improved} of {n} blocks")
-                });
+                c.unconfirmed = (figures.each.len() > 1 && 2 * splits_improved <= n)
+                    .then(|| format!("{} {splits_improved} of {n} blocks", crate::verdict::VOTE));
             }
             Err(e) => c.unconfirmed = Some(format!("the refit with it failed: {e}")),
         }
