@@ -950,6 +950,26 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
     all.iter().map(|f| family(f, src, among)).collect()
 }
 
+/// The first `keep` of `found` (sorted best first), and beside them each operand's first
+/// `allowance` of the rest.
+fn cut(
+    found: Vec<Found>,
+    keep: usize,
+    allowance: &dyn Fn(&Found) -> usize,
+    operand: &dyn Fn(&Found) -> Option<String>,
+) -> Vec<Found> {
+    let mut per: std::collections::HashMap<Option<String>, usize> = Default::default();
+    let mut out = Vec::new();
+    for (i, f) in found.into_iter().enumerate() {
+        let n = per.entry(operand(&f)).or_default();
+        *n += 1;
+        if i < keep || *n <= allowance(&f) {
+            out.push(f);
+        }
+    }
+    out
+}
+
 /// The `keep` best of `shapes`, and beside them the `per_operand` best over each operand of
 /// `diverse`: each on its coarse grid, the best refined.
 fn best(
@@ -971,28 +991,11 @@ fn best(
             .filter(|o| diverse.contains(o))
             .map_or(0, |_| per_operand)
     };
-    let mut kept: Vec<Found> = Vec::new();
-    let mut per: std::collections::HashMap<Option<String>, usize> = Default::default();
-    for (i, f) in found.into_iter().enumerate() {
-        let n = per.entry(operand(&f)).or_default();
-        *n += 1;
-        if i < RESCORED * keep || *n <= allowance(&f) {
-            kept.push(f);
-        }
-    }
+    let mut kept = cut(found, RESCORED * keep, &allowance, &operand);
     kept.par_iter_mut()
         .for_each(|f| f.gain = screen.gain(&f.expr()));
     kept.sort_by(|a, b| b.gain.total_cmp(&a.gain));
-    let mut per: std::collections::HashMap<Option<String>, usize> = Default::default();
-    let mut found = Vec::new();
-    for f in kept {
-        let n = per.entry(operand(&f)).or_default();
-        *n += 1;
-        if found.len() < keep || *n <= allowance(&f) {
-            found.push(f);
-        }
-    }
-    found
+    cut(kept, keep, &allowance, &operand)
         .into_par_iter()
         .map(|f| refine(f, |e| screen.gain(e)))
         .collect()
