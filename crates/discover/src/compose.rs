@@ -63,8 +63,16 @@
 //! them the [`PER_OPERAND`] best over each non-thermal input, so that one input's shapes (or an
 //! idle column's) cannot fill the beam alone (measured: `lag(abs(supply_v − 28.1), 900)` was
 //! never composed, `abs(supply_v − 28.1)` seventh behind a relay on the supply and four shapes of
-//! an idle heater column; with it, the lag of it led the depth-two search by 77 nats) — and only the
-//! [`PROPOSED`] best shapes that no listed family already covers are handed on. They are then
+//! an idle heater column; with it, the lag of it led the depth-two search by 77 nats). A
+//! composition is kept when it explains more than the best single shape by [`EARN_NATS`], or
+//! as much as it (within [`crate::verdict::INDISTINCT_NATS`]) and more than its own inner shape by
+//! [`EARN_NATS`]: another explanation of the same residual, for the refits and the verdict to
+//! weigh (measured: a relay on a lagging element tied a wider relay on the thermometer, 111.1
+//! against 110.9 nats, and the wider relay was named, 1.85× the floor where the truth reaches
+//! 0.91×; now "cannot tell", naming both). Shapes whose training columns are one
+//! ([`simplest`]: the same column, the same stateful functions over the same inputs) are one
+//! name, the simplest. Only the [`PROPOSED`] best shapes that no listed family already covers are
+//! handed on. They are then
 //! scored, refitted, placebo-tested — each placebo the best of the same shape's members on the
 //! shifted columns ([`crate::candidates::Searched::Alternatives`]), since the candidate is the best
 //! of them on the run — and judged like every other candidate, including the leg that the
@@ -77,10 +85,11 @@
 //! relay on a supply voltage or a second input, a saturating supply, a lagged relay and a relay
 //! on a lagged supply are named with their parameters exactly; the rate of a lagged input as a
 //! lagged rate, the size of a temperature's rate, the rate of a saturating supply, a lagged
-//! V-shaped supply. Not yet: an input times a rate, a lagged rate (named as the lag it equals
-//! with the model's own `T`), a narrow mode hop, a saturating gradient, a saturating lagging
-//! element, a lagged mode hop, a lagged warm-up (named as one warm-up), and the square of a
-//! gradient's rate (a relay on another gradient was named: a wrong effect).
+//! V-shaped supply; a mode hop of a lagging element is "cannot tell" between itself and a wider
+//! relay, as the run cannot tell them. Not yet: an input times a rate, a lagged rate (named as
+//! the lag it equals with the model's own `T`), a narrow mode hop, a saturating gradient, a
+//! saturating lagging element, a lagged mode hop, a lagged warm-up (named as one warm-up), and
+//! the square of a gradient's rate ("cannot tell" between two relays on another gradient).
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
@@ -636,6 +645,122 @@ fn refine(mut f: Found, objective: impl Fn(&Expr) -> f64) -> Found {
     f
 }
 
+/// Columns closer than this are one hypothesis on the training run: the share of one's variance
+/// the other leaves unexplained (`1 − R²`; 10⁻³ is a difference of about 3 % of the spread).
+const SAME_COLUMN: f64 = 1e-3;
+
+/// `found` (best first) with each set of shapes whose training columns are the same hypothesis
+/// ([`SAME_COLUMN`]) reduced to its simplest — depth one before depth two, then fewer parameters
+/// — in the place of the set's best. Why: the language writes one function of the data in many
+/// ways (a product with a supply that wanders ±2 % is the other factor; the square of that supply
+/// is a straight line in it; a clamp of a kink the run barely reaches is a clamp), and a name
+/// should be the simplest that fits (measured: `rate(sq(supply_v), 550)`, `supply_v *
+/// abs(supply_v − 28)` and `clamp(abs(supply_v − 27.2), 0.68, 1.12)` named for the truths
+/// `rate(supply_v, 600)`, `abs(supply_v − 28)` and `clamp(supply_v, 27.9, 28.3)`).
+fn simplest(p: &Prepared, found: Vec<Found>) -> Vec<Found> {
+    let complexity = |f: &Found| (usize::from(f.shape.inner.is_some()), f.u.len());
+    let cols: Vec<Vec<f64>> = found.par_iter().map(|f| values(p, &f.expr())).collect();
+    let kinds: Vec<(Vec<String>, Vec<String>)> =
+        found.iter().map(|f| dynamics(&f.expr())).collect();
+    let mut kept: Vec<(usize, Found)> = Vec::new();
+    for (i, f) in found.into_iter().enumerate() {
+        match kept
+            .iter_mut()
+            .find(|(j, _)| kinds[i] == kinds[*j] && same_column(&cols[i], &cols[*j]))
+        {
+            Some(slot) if complexity(&f) < complexity(&slot.1) => *slot = (i, f),
+            Some(_) => {}
+            None => kept.push((i, f)),
+        }
+    }
+    kept.into_iter().map(|(_, f)| f).collect()
+}
+
+/// Whether one of `e`'s calls does nothing on the training run: `e` with that call replaced by
+/// its operand has the same column ([`same_column`]). A lag shorter than a bin is its operand
+/// there (measured: `rate(lag(t_coil_c, 30), 30)` tied `rate(t_coil_c)` and made "cannot tell").
+fn needless(p: &Prepared, e: &Expr) -> bool {
+    fn without(e: &Expr, k: &mut usize) -> Option<Expr> {
+        match e {
+            Expr::Call(name, args) => {
+                if *k == 0 {
+                    return args.first().cloned();
+                }
+                *k -= 1;
+                let mut out = Vec::with_capacity(args.len());
+                let mut done = None;
+                for a in args {
+                    match (&done, without(a, k)) {
+                        (None, Some(r)) => {
+                            out.push(r);
+                            done = Some(());
+                        }
+                        _ => out.push(a.clone()),
+                    }
+                }
+                done.map(|_| Expr::Call(name.clone(), out))
+            }
+            Expr::Neg(a) => without(a, k).map(|r| Expr::Neg(Box::new(r))),
+            Expr::Binary(op, a, b) => match without(a, k) {
+                Some(r) => Some(Expr::Binary(*op, Box::new(r), b.clone())),
+                None => without(b, k).map(|r| Expr::Binary(*op, a.clone(), Box::new(r))),
+            },
+            Expr::Name(_) | Expr::Num(..) | Expr::Text(_) => None,
+        }
+    }
+    let col = values(p, e);
+    (0..)
+        .map_while(|i| without(e, &mut { i }))
+        .any(|stripped| same_column(&col, &values(p, &stripped)))
+}
+
+/// What an expression's dynamics are: the stateful functions it calls and the inputs it reads,
+/// each sorted. Two shapes with the same training column and the same dynamics differ only in a
+/// memoryless reshaping of values the run never took; two with different dynamics (a relay on a
+/// lagged temperature against a wider relay on the temperature) are two physical hypotheses that
+/// a run with other ramp rates would separate, and both are handed on for the verdict to say so.
+fn dynamics(e: &Expr) -> (Vec<String>, Vec<String>) {
+    fn calls(e: &Expr, out: &mut Vec<String>) {
+        match e {
+            Expr::Call(name, args) => {
+                if lang::FUNCTIONS
+                    .iter()
+                    .any(|f| f.name == name.as_str() && f.stateful)
+                {
+                    out.push(name.clone());
+                }
+                for a in args {
+                    calls(a, out);
+                }
+            }
+            Expr::Neg(a) => calls(a, out),
+            Expr::Binary(_, a, b) => {
+                calls(a, out);
+                calls(b, out);
+            }
+            Expr::Name(_) | Expr::Num(..) | Expr::Text(_) => {}
+        }
+    }
+    let mut ops = Vec::new();
+    calls(e, &mut ops);
+    ops.sort();
+    let mut names = names_in(e);
+    names.sort();
+    names.dedup();
+    (ops, names)
+}
+
+/// Whether two training columns are one hypothesis ([`SAME_COLUMN`]); never when either is
+/// missing or constant.
+fn same_column(a: &[f64], b: &[f64]) -> bool {
+    let varies = |v: &[f64]| crate::design::mean_sd(v).1 > 0.0;
+    a.len() == b.len()
+        && a.len() > 2
+        && varies(a)
+        && varies(b)
+        && unexplained(a, &[&b.to_vec()]) < SAME_COLUMN
+}
+
 /// The binned training values of `e` (empty when they cannot be computed).
 fn values(p: &Prepared, e: &Expr) -> Vec<f64> {
     p.binned(&[e.to_string()])
@@ -938,14 +1063,25 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
         .fold(f64::NEG_INFINITY, f64::max);
     among += next.len();
     let mut second = best(&screen, next, BEAM, (0, &HashSet::new()));
-    // A composition earns its second operator only by explaining more than the best single one.
-    second.retain(|f| f.gain > floor + EARN_NATS);
+    // A composition earns its second operator by explaining more than the best single one; or,
+    // explaining as much as it (within what the run cannot tell), by explaining more than its own
+    // inner shape: then it is another explanation of the same residual, and the refits decide.
+    second.retain(|f| {
+        f.gain > floor + EARN_NATS
+            || (f.gain > floor - crate::verdict::INDISTINCT_NATS
+                && f.shape
+                    .inner
+                    .as_ref()
+                    .is_some_and(|i| f.gain > i.gain + EARN_NATS)
+                && !needless(p, &f.expr()))
+    });
 
     let mut all: Vec<Found> = first.into_iter().chain(second).collect();
     all.retain(|f| f.gain > 0.0 && !covered.contains(&signature(&f.expr().to_string())));
     all.sort_by(|a, b| b.gain.total_cmp(&a.gain));
     let mut seen = HashSet::new();
     all.retain(|f| seen.insert(signature(&f.expr().to_string())));
+    let mut all = simplest(p, all);
     all.truncate(PROPOSED);
     all.iter().map(|f| family(f, src, among)).collect()
 }
