@@ -21,10 +21,12 @@
 //!   50 % of the operand's spread, log-spaced; a location (`clamp`'s bounds, a shift) spans the
 //!   operand's 5th to 95th percentile.
 //! - **A shift** `x − c`, `c` estimated, is put in front of a *level* operand (a temperature, a
-//!   voltage: its zero is a convention) when the function depends on where zero is: tested
+//!   voltage, a gradient: a function of it may act about any value) when the function depends on
+//!   where zero is: tested
 //!   numerically, once per function, by whether `f(x − c)` lies in the span of `f(x)`, `x` and 1
-//!   (`lag`, `rate` and `sq` are not shifted: the model's linear terms already absorb what a shift
-//!   changes). A function with a location parameter of its own (`clamp`) is not shifted either.
+//!   (`lag` and `rate` are not shifted; `sq` is shifted only where `x` is no term of the model,
+//!   whose linear terms would otherwise absorb what a shift changes). A function with a location
+//!   parameter of its own (`clamp`) is not shifted either.
 //!   That is how `hyst(T − c, h)` — a bias that switches at `c + h` on heating and `c − h` on
 //!   cooling — arises without being listed.
 //! - **Scored cheaply first**: each composition's column against the base design's residual by the
@@ -102,7 +104,7 @@ use tcomp_train::Dataset;
 use tcomp_train::features::{self, FeatureSpec};
 
 /// Depth-one shapes composed again.
-pub const BEAM: usize = 6;
+pub const BEAM: usize = 8;
 /// Depth-one shapes of each operand composed again beside the beam.
 pub const PER_OPERAND: usize = 2;
 /// Composed candidates handed on to scoring.
@@ -172,7 +174,10 @@ fn significant(v: f64, n: usize) -> f64 {
 #[derive(Clone, Debug)]
 struct Atom {
     expr: Expr,
-    /// Its zero is a convention (a temperature, a voltage), not a physical zero (a gradient).
+    /// A function of it may act about any value, not only about zero: a shift `x − c` is
+    /// searched in front of the functions whose output depends on it. True of every atom (a
+    /// temperature's or a voltage's zero is a convention; a gradient's is physical, but a relay on
+    /// it switches where the element does); a product is no level.
     level: bool,
 }
 
@@ -283,6 +288,9 @@ impl Shape {
 struct Behaviour {
     /// `f(x − c)` is not in the span of `f(x)`, `x` and 1: where zero is matters.
     shift_matters: bool,
+    /// `f(x − c)` is not in the span of `f(x)` and 1: where zero is matters unless `x` itself is
+    /// in the model (a square).
+    shift_matters_alone: bool,
     /// `f(x + c) = f(x) + c`: the output is a level too (a lag).
     keeps_level: bool,
     /// `f(a·x + c) = a·f(x) + f(c)`: a linear time-invariant filter (a lag, a rate), which
@@ -371,8 +379,10 @@ fn behaviour(f: &Function) -> Option<Behaviour> {
         .iter()
         .zip(&fx)
         .all(|(a, b)| (a - 3.0 * b).abs() <= 3.0 * tol);
+    let alone = self::unexplained(&fs, &[&fx]);
     Some(Behaviour {
         shift_matters: unexplained > 1e-4,
+        shift_matters_alone: alone > 1e-4,
         keeps_level: keeps,
         linear: scales && hi - lo <= tol,
     })
@@ -761,6 +771,22 @@ fn same_column(a: &[f64], b: &[f64]) -> bool {
         && unexplained(a, &[&b.to_vec()]) < SAME_COLUMN
 }
 
+/// Whether `e`'s training column lies in the span of the base model's design (its linear terms
+/// and Gaussians; [`SAME_COLUMN`]).
+fn in_model(p: &Prepared, e: &Expr) -> bool {
+    let v = values(p, e);
+    if v.len() != p.phi.nrows() || v.len() < 3 {
+        return false;
+    }
+    let cols: Vec<Vec<f64>> = p
+        .phi
+        .column_iter()
+        .map(|c| c.iter().copied().collect())
+        .collect();
+    let refs: Vec<&Vec<f64>> = cols.iter().collect();
+    unexplained(&v, &refs) < SAME_COLUMN
+}
+
 /// The binned training values of `e` (empty when they cannot be computed).
 fn values(p: &Prepared, e: &Expr) -> Vec<f64> {
     p.binned(&[e.to_string()])
@@ -794,7 +820,12 @@ fn shape_of(
         .params
         .iter()
         .any(|q| matches!(q.domain, Domain::Finite | Domain::NotBelowPrevious));
-    let shifted = level && b.shift_matters && !own_location;
+    // Where zero is matters for a square unless the model's own terms hold the operand: the
+    // shift's linear part is then theirs (measured: `sq(supply_v − 28)` was named as
+    // `sq(abs(supply_v − 28))`, and `lag(sq(supply_v − 28), 600)` as a lagged kink, 4.50× the
+    // floor, with `supply_v` in no term of the model).
+    let shift_matters = b.shift_matters || (b.shift_matters_alone && !in_model(p, operand));
+    let shifted = level && shift_matters && !own_location;
     let (lo, hi) = spread(&values(p, operand))?;
     let width = hi - lo;
     if width.is_nan() || width <= 0.0 {
@@ -938,9 +969,13 @@ fn atoms(src: &Sources) -> Vec<Atom> {
     let th = &src.thermometers;
     for (i, a) in th.iter().enumerate() {
         for b in th.iter().skip(i + 1) {
+            // A gradient's zero is physical, but a relay or a kink on it sits wherever the
+            // element switches (measured: `hyst(t_anode_c − t_shell_c − 1, 0.5)` was not
+            // searched, and a narrow clamp of the gradient times the supply was named, 2.89× the
+            // floor; with the shift, the relay exactly, 1.02×).
             out.push(Atom {
                 expr: Expr::name(a) - Expr::name(b),
-                level: false,
+                level: true,
             });
         }
     }
@@ -1324,15 +1359,17 @@ fn describe(e: &Expr) -> String {
 mod tests {
     use super::*;
 
-    /// What each function does to a level is read off the evaluator: lag and rate and the square
-    /// need no shift, a relay and a kink do; a lag keeps a level a level.
+    /// What each function does to a level is read off the evaluator: lag and rate need no shift,
+    /// the square only beside its operand's linear term, a relay and a kink do; a lag keeps a
+    /// level a level.
     #[test]
     #[allow(clippy::unwrap_used)]
     fn behaviours_are_measured_not_listed() {
         let b = |name: &str| lang::function(name).and_then(behaviour).unwrap();
         assert!(!b("lag").shift_matters && b("lag").keeps_level);
         assert!(!b("rate").shift_matters && !b("rate").keeps_level);
-        assert!(!b("sq").shift_matters);
+        assert!(!b("sq").shift_matters && b("sq").shift_matters_alone);
+        assert!(!b("lag").shift_matters_alone && !b("rate").shift_matters_alone);
         assert!(b("hyst").shift_matters);
         assert!(b("abs").shift_matters);
         // Linear time-invariant: the filters, not the memoryless or switching functions.

@@ -27,8 +27,9 @@
 //! "Cannot tell" is said, naming the candidates and the kind of run that would separate them
 //! ([`separating_run`]), when two candidates clear every leg and their refits' log evidence differs
 //! by less than [`INDISTINCT_NATS`]; when a second candidate is no worse than the first on the
-//! refit's evidence and on the pooled held-out figure, beats its placebos, and fails only the
-//! blocks' vote (the first then rests on a vote of a few blocks alone); or when the best candidate
+//! refit's evidence and on the pooled held-out figure and fails only the blocks' vote (above its
+//! placebos), or only its placebos while reading none of the first's inputs (the first then rests
+//! on a leg the better explanation failed narrowly); or when the best candidate
 //! clears every leg but the placebos (the run cannot tell it from a drift). It is never a missing
 //! effect: `--rounds` stops there.
 //!
@@ -400,17 +401,28 @@ pub fn separating_run(a: &Scored, b: &Scored) -> String {
 /// A second candidate the run cannot tell from the first: one that clears the criterion as a
 /// missing effect with a real refit's evidence within [`INDISTINCT_NATS`] of the first's; or
 /// ([`Rival::NoWorse`]) one that is no worse on either judge — its refit's evidence at least the
-/// first's less [`INDISTINCT_NATS`], its pooled held-out improvement at least the first's, and above
-/// its placebos — and fails only a held-out leg that the first's passing rests on (the blocks'
-/// vote). Why the second: the first then stands on the vote of a few blocks alone, and a vote of
-/// two blocks split one to one is no evidence for either (measured: a lagged relay on one gradient
-/// named over the rate of that relay, 192.9 against 194.7 nats and 32 % against 40 % held out,
-/// because the second lowered one of two blocks; neither was the truth).
+/// first's less [`INDISTINCT_NATS`], its pooled held-out improvement at least the first's — and
+/// fails only the blocks' vote (above its placebos), or only its placebos while reading none of
+/// the first's inputs. Why: the first then stands on a leg the second failed by a vote of a few
+/// blocks, or on the second's likeness to a drift, while the second explains more; that is no
+/// evidence for the first. (A second over the first's own inputs that fails only its placebos
+/// refines a shape of an input the first established; the first is named.) Measured: a lagged
+/// relay on one gradient named over the rate of that relay, 192.9 against 194.7 nats and 32 %
+/// against 40 % held out, because the second lowered one of two blocks; a lag of the
+/// thermometer named, 138 nats and 19 % held out, over a kink in a heater voltage, 199 nats and
+/// 83 %, which was no better than its placebos; the truth was a lag of the heater voltage, and
+/// the lag named made the verification run four times worse.
 fn rival(cands: &[Scored]) -> Option<(&Scored, Rival)> {
     let first = cands.first()?;
     let ev = |c: &Scored| c.confirmation.as_ref().map(|k| k.delta_log_evidence_refit);
     let e0 = ev(first)?;
     let other = |c: &&Scored| c.refines.is_none() && c.expressions != first.expressions;
+    let first_reads = inputs(&first.expressions);
+    let disjoint = |c: &Scored| {
+        inputs(&c.expressions)
+            .iter()
+            .all(|i| !first_reads.contains(i))
+    };
     if let Some(c) = cands
         .iter()
         .skip(1)
@@ -427,10 +439,11 @@ fn rival(cands: &[Scored]) -> Option<(&Scored, Rival)> {
             !c.passes
                 && ev(c).is_some_and(|e| e > e0 - INDISTINCT_NATS)
                 && c.improvement_pct >= first.improvement_pct
-                && c.placebo.as_ref().is_some_and(|p| p.passes())
-                && c.unconfirmed
-                    .as_deref()
-                    .is_some_and(|u| u.starts_with(VOTE))
+                && ((c.placebo.as_ref().is_some_and(|p| p.passes())
+                    && c.unconfirmed
+                        .as_deref()
+                        .is_some_and(|u| u.starts_with(VOTE)))
+                    || (fails_only_placebos(c) && disjoint(c)))
         })
         .map(|c| (c, Rival::NoWorse))
 }
@@ -440,7 +453,8 @@ fn rival(cands: &[Scored]) -> Option<(&Scored, Rival)> {
 enum Rival {
     /// It clears the criterion too.
     Passes,
-    /// It fails only the blocks' vote, and is no worse on the evidence or the pooled held-out.
+    /// It fails only the blocks' vote or only its placebos, and is no worse on the evidence or
+    /// the pooled held-out.
     NoWorse,
 }
 
@@ -465,8 +479,15 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
             Rival::NoWorse => format!(
                 "the first clears the criterion, and the second explains the training run and its \
                  held-out blocks no worse (it lowers their residual by {:.1} % against {:.1} %) \
-                 but in fewer of them, too few blocks to decide",
-                b.improvement_pct, a.improvement_pct
+                 but {}",
+                b.improvement_pct,
+                a.improvement_pct,
+                if fails_only_placebos(b) {
+                    "no better than its own columns shifted in time: the run cannot tell whether \
+                     either is more than a drift"
+                } else {
+                    "in fewer of them, too few blocks to decide"
+                }
             ),
         };
         let ev = |c: &Scored| {
@@ -662,6 +683,19 @@ mod tests {
             p.statistic = 1.0;
         }
         let (v, t) = decided(vec![cand("lag(hyst(g, 2), 420)", 11.0, true), off]);
+        assert_eq!(v, Verdict::MissingEffect, "{t}");
+    }
+
+    /// A second candidate reading other inputs, explaining more and failing only its placebos:
+    /// the first is not established ("cannot tell"); over the first's own inputs it is only a
+    /// shape the first's input may take, and the first is named.
+    #[test]
+    fn a_rival_on_other_inputs_failing_only_placebos_cannot_be_told_apart() {
+        let first = || cand("lag(t_qma_c, 1200)", 11.0, true);
+        let (v, t) = decided(vec![first(), cand("abs(heater_v - 12.4)", 15.0, false)]);
+        assert_eq!(v, Verdict::CannotTell, "{t}");
+        assert!(t.contains("more than a drift"), "{t}");
+        let (v, t) = decided(vec![first(), cand("clamp(t_qma_c, 1, 2)", 15.0, false)]);
         assert_eq!(v, Verdict::MissingEffect, "{t}");
     }
 
