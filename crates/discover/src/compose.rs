@@ -103,7 +103,10 @@ use tcomp_core::lang::{self, Domain, Function, Operands};
 use tcomp_train::Dataset;
 use tcomp_train::features::{self, FeatureSpec};
 
-/// Depth-one shapes composed again.
+/// Depth-one shapes composed again (and depth-two shapes kept). Eight, not six, since a shifted
+/// square of a supply took a place: `hyst(lag(supply_v, 300) − 28.2, 0.15)` was then not
+/// composed, as `lag(supply_v)` came seventh (measured: `tcomp diagnose` on the RLG preset's
+/// 22,000 rows 1.39–1.45 s with eight, under the 2 s budget).
 pub const BEAM: usize = 8;
 /// Depth-one shapes of each operand composed again beside the beam.
 pub const PER_OPERAND: usize = 2;
