@@ -353,3 +353,23 @@ scenarios! {
     #[ignore = "a known miss: run with --ignored to measure it"]
     a_lagged_second_input: "lagged second input", Qma, [Poly], 95, "lag(heater_v, 900)", 6.0, true, 0.25;
 }
+
+// A sixth held-out set (2026-11-29): kinds no earlier scenario has, written after the changes the
+// fifth set led to, and run once: 2 of 5 pass (3 named with their shape); figures in
+// BENCHMARKS.md.
+scenarios! {
+    /// First run: none; 6.48× where the truth form reaches 1.16×. No product of a relay with the
+    /// temperature was among the candidates.
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    a_relay_on_an_input_scaled_by_temperature: "relay on an input × temperature", Qma, [Poly], 101, "t_qma_c * hyst(supply_v - 28, 0.3)", 6.0, false, 0.25;
+    /// First run: named `sq(rate(t_qma_c, 100))`, the truth's shape with a 100 s window for its
+    /// 60 s, 1.22× where the truth form reaches 0.92× (told: 0.97×): 2 % over the figure's bound.
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    the_square_of_a_temperature_rate: "square of a temperature rate", Qma, [Poly], 102, "sq(rate(t_qma_c))", 6.0, false, 0.25;
+    a_lagged_gradient_of_another_pair: "lagged gradient of another pair", Rlg, [Poly], 103, "lag(t_anode_c - t_cathode_c, 1200)", 6.0, false, 0.25;
+    a_kink_in_a_lagged_input: "kink in a lagged input", Qma, [Poly], 104, "abs(lag(supply_v, 600) - 28.1)", 6.0, false, 0.25;
+    /// First run: none, 1.04× with nothing added, where the truth form reaches 1.01× and the
+    /// trainer told the truth 1.12×: on this run the relay is not worth its feature.
+    #[ignore = "not identifiable here: run with --ignored to measure it"]
+    a_mode_hop_on_another_thermometer: "mode hop on another thermometer", Rlg, [Poly], 105, "hyst(t_anode_c - 40, 3)", 6.0, false, 0.25;
+}
