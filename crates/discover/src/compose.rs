@@ -21,8 +21,7 @@
 //!   50 % of the operand's spread, log-spaced; a location (`clamp`'s bounds, a shift) spans the
 //!   operand's 5th to 95th percentile.
 //! - **A shift** `x − c`, `c` estimated, is put in front of a *level* operand (a temperature, a
-//!   voltage, a gradient: a function of it may act about any value) when the function depends on
-//!   where zero is: tested
+//!   voltage: its zero is a convention) when the function depends on where zero is: tested
 //!   numerically, once per function, by whether `f(x − c)` lies in the span of `f(x)`, `x` and 1
 //!   (`lag` and `rate` are not shifted; `sq` is shifted only where `x` is no term of the model,
 //!   whose linear terms would otherwise absorb what a shift changes). A function with a location
@@ -86,12 +85,14 @@
 //! Measured (`tests/composed.rs`, `tests/false_discoveries.rs`, BENCHMARKS.md): a mode hop, a
 //! relay on a supply voltage or a second input, a saturating supply, a lagged relay and a relay
 //! on a lagged supply are named with their parameters exactly; the rate of a lagged input as a
-//! lagged rate, the size of a temperature's rate, the rate of a saturating supply, a lagged
-//! V-shaped supply; a mode hop of a lagging element is "cannot tell" between itself and a wider
+//! lagged rate, the size of a temperature's rate or a supply's, the rate of a saturating supply, a
+//! lagged V-shaped supply, a lagged parabola in the supply, a kink in a lagged supply; a mode hop of a lagging element is "cannot tell" between itself and a wider
 //! relay, as the run cannot tell them. Not yet: an input times a rate, a lagged rate (named as
 //! the lag it equals with the model's own `T`), a narrow mode hop, a saturating gradient, a
-//! saturating lagging element, a lagged mode hop, a lagged warm-up (named as one warm-up), and
-//! the square of a gradient's rate ("cannot tell" between two relays on another gradient).
+//! saturating lagging element, a lagged mode hop, a lagged warm-up (named as one warm-up), a
+//! saturating temperature rate, a lagged heater voltage and the square of a gradient's rate
+//! ("cannot tell"), a relay on the supply times the temperature (none), a relay on a gradient
+//! away from zero (a narrow clamp of the gradient times the supply).
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
@@ -177,10 +178,8 @@ fn significant(v: f64, n: usize) -> f64 {
 #[derive(Clone, Debug)]
 struct Atom {
     expr: Expr,
-    /// A function of it may act about any value, not only about zero: a shift `x − c` is
-    /// searched in front of the functions whose output depends on it. True of every atom (a
-    /// temperature's or a voltage's zero is a convention; a gradient's is physical, but a relay on
-    /// it switches where the element does); a product is no level.
+    /// Its zero is a convention (a temperature, a voltage), not a physical zero (a gradient): a
+    /// shift `x − c` is searched in front of the functions whose output depends on it.
     level: bool,
 }
 
@@ -972,13 +971,15 @@ fn atoms(src: &Sources) -> Vec<Atom> {
     let th = &src.thermometers;
     for (i, a) in th.iter().enumerate() {
         for b in th.iter().skip(i + 1) {
-            // A gradient's zero is physical, but a relay or a kink on it sits wherever the
-            // element switches (measured: `hyst(t_anode_c − t_shell_c − 1, 0.5)` was not
-            // searched, and a narrow clamp of the gradient times the supply was named, 2.89× the
-            // floor; with the shift, the relay exactly, 1.02×).
+            // A gradient's zero is physical: a relay on it is searched about zero. (Searched
+            // about any value, `hyst(t_anode_c − t_shell_c − 1, 0.5)` was named exactly, 1.02×
+            // the floor, where a narrow clamp of the gradient times the supply was named, 2.89×;
+            // but each relay's two switching points on each pair of thermometers, and their
+            // compositions, took `tcomp diagnose` on the RLG preset from 1.4 s to 1.8–2.2 s,
+            // over its 2 s budget.)
             out.push(Atom {
                 expr: Expr::name(a) - Expr::name(b),
-                level: true,
+                level: false,
             });
         }
     }
