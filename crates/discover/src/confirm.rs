@@ -35,6 +35,9 @@ use std::path::Path;
 use tcomp_train::method::Basis;
 use tcomp_train::{Dataset, FitOptions, Roles, metrics};
 
+/// How the block vote words a candidate it does not confirm (the verdict reads it).
+pub(crate) const VOTE: &str = "lowers the held-out residual in only";
+
 mod blocks;
 use blocks::{Split, block_splits, parts_of, training_blocks, verification_split};
 
@@ -582,7 +585,7 @@ pub fn confirm(
                 // one block carries is more likely that block's drift. Only the blocks where the
                 // candidate moves vote (see `voting_blocks`).
                 c.unconfirmed = (figures.each.len() > 1 && 2 * splits_improved <= n)
-                    .then(|| format!("{} {splits_improved} of {n} blocks", crate::verdict::VOTE));
+                    .then(|| format!("{} {splits_improved} of {n} blocks", VOTE));
             }
             Err(e) => c.unconfirmed = Some(format!("the refit with it failed: {e}")),
         }

@@ -42,6 +42,7 @@
 //! say which). A candidate that only re-states a feature the model has (its rate with a longer
 //! window) is a refinement, named as such and never as a missing effect.
 
+use crate::confirm::VOTE;
 use crate::score::Scored;
 use serde::Serialize;
 use tcomp_train::TrainError;
@@ -457,9 +458,6 @@ enum Rival {
     /// the pooled held-out.
     NoWorse,
 }
-
-/// How [`crate::confirm`]'s block vote words a candidate it does not confirm.
-pub(crate) const VOTE: &str = "lowers the held-out residual in only";
 
 /// Whether `c`'s only failed leg is the placebos'.
 pub(crate) fn fails_only_placebos(c: &Scored) -> bool {
