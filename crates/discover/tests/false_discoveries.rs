@@ -25,6 +25,7 @@
 //! diagnoses with the listed effects alone (`tcomp diagnose --no-compose`).
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
+use rayon::prelude::*;
 use tcomp_demo::{Simulated, simulated};
 use tcomp_discover::{DiagnoseOptions, Verdict, diagnose};
 use tcomp_sim::{EffectKind, SensorKind, presets};
@@ -123,94 +124,105 @@ fn env(name: &str, default: u64) -> u64 {
         .unwrap_or(default)
 }
 
+/// The simulated runs of `control` for `seed` (the `s`-th of the set).
+fn control_run(control: &str, seed: u64, s: u64) -> Simulated {
+    match control {
+        "plain" => {
+            let name = if s.is_multiple_of(2) { "qma" } else { "rlg" };
+            simulated(&presets::preset(name).unwrap().with_seed(seed)).unwrap()
+        }
+        "distractors" => {
+            let p = presets::with_effects(SensorKind::Ifog, &[EffectKind::Poly, EffectKind::Rate])
+                .unwrap()
+                .with_seed(seed);
+            let mut sim = simulated(&p).unwrap();
+            for (d, k) in [(&mut sim.train, 1.0), (&mut sim.verify, 2.0)] {
+                let coil = d.column("t_coil_c").unwrap().to_vec();
+                let board: Vec<f64> = lag(&coil, 900.0)
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| 0.9 * v + 3.0 + 0.02 * (i as f64 * 0.37 + k).sin())
+                    .collect();
+                let fan: Vec<f64> = coil.iter().map(|v| 0.02 * v + 0.1).collect();
+                *d = with_columns(d, &[("t_board_c", board), ("fan_duty", fan)]);
+            }
+            sim
+        }
+        "idle_input" => {
+            let mut sim = simulated(&presets::preset("rlg").unwrap().with_seed(seed)).unwrap();
+            for (d, k) in [(&mut sim.train, 1u64), (&mut sim.verify, 2u64)] {
+                let w = drift(d.len(), 3600.0, 0.3, seed * 11 + k);
+                let heater: Vec<f64> = w.iter().map(|v| 12.0 + v).collect();
+                *d = with_columns(d, &[("heater_v", heater)]);
+            }
+            sim
+        }
+        _ => {
+            let mut sim = simulated(&presets::preset("qma").unwrap().with_seed(seed)).unwrap();
+            if control == "drift_lagging" {
+                for d in [&mut sim.train, &mut sim.verify] {
+                    let air = d.column("t_chamber_c").unwrap().to_vec();
+                    *d = with_columns(d, &[("t_case_c", lag(&air, 1200.0))]);
+                }
+            }
+            let floor = sim.verify_truth.noise.std_100s;
+            let target = sim.train_truth.columns.target.clone();
+            for (d, k) in [(&mut sim.train, 1u64), (&mut sim.verify, 2u64)] {
+                let n = d.len();
+                let w = drift(n, 10_800.0, 3.0 * floor, seed * 7 + k);
+                let names = d.names().to_vec();
+                let cols: Vec<Vec<f64>> = names
+                    .iter()
+                    .map(|c| {
+                        let v = d.column(c).unwrap();
+                        if *c == target {
+                            v.iter().zip(&w).map(|(a, b)| a + b).collect()
+                        } else {
+                            v.to_vec()
+                        }
+                    })
+                    .collect();
+                *d = Dataset::from_columns(d.file(), names, cols);
+            }
+            sim
+        }
+    }
+}
+
 #[test]
 fn negative_controls_rarely_name_an_effect() {
     let seeds = env("SEEDS", 20);
     let first = env("FIRST", 9000);
-    let mut rates = Vec::new();
-    for control in [
+    let controls = [
         "plain",
         "distractors",
         "drift",
         "drift_lagging",
         "idle_input",
-    ] {
+    ];
+    // The runs are independent: two at a time fill the cores that one diagnosis leaves idle in
+    // its serial parts (the same verdicts, printed in the same order).
+    let runs: Vec<(&str, u64)> = controls
+        .iter()
+        .flat_map(|&c| (0..seeds).map(move |s| (c, s)))
+        .collect();
+    let verdicts: Vec<(Verdict, String)> = runs
+        .par_iter()
+        .map(|&(control, s)| verdict(&control_run(control, first + s, s)))
+        .collect();
+    let mut rates = Vec::new();
+    for (k, control) in controls.iter().enumerate() {
         let (mut missing, mut cannot) = (0, 0);
         for s in 0..seeds {
-            let seed = first + s;
-            let sim = match control {
-                "plain" => {
-                    let name = if s % 2 == 0 { "qma" } else { "rlg" };
-                    simulated(&presets::preset(name).unwrap().with_seed(seed)).unwrap()
-                }
-                "distractors" => {
-                    let p = presets::with_effects(
-                        SensorKind::Ifog,
-                        &[EffectKind::Poly, EffectKind::Rate],
-                    )
-                    .unwrap()
-                    .with_seed(seed);
-                    let mut sim = simulated(&p).unwrap();
-                    for (d, k) in [(&mut sim.train, 1.0), (&mut sim.verify, 2.0)] {
-                        let coil = d.column("t_coil_c").unwrap().to_vec();
-                        let board: Vec<f64> = lag(&coil, 900.0)
-                            .iter()
-                            .enumerate()
-                            .map(|(i, v)| 0.9 * v + 3.0 + 0.02 * (i as f64 * 0.37 + k).sin())
-                            .collect();
-                        let fan: Vec<f64> = coil.iter().map(|v| 0.02 * v + 0.1).collect();
-                        *d = with_columns(d, &[("t_board_c", board), ("fan_duty", fan)]);
-                    }
-                    sim
-                }
-                "idle_input" => {
-                    let mut sim =
-                        simulated(&presets::preset("rlg").unwrap().with_seed(seed)).unwrap();
-                    for (d, k) in [(&mut sim.train, 1u64), (&mut sim.verify, 2u64)] {
-                        let w = drift(d.len(), 3600.0, 0.3, seed * 11 + k);
-                        let heater: Vec<f64> = w.iter().map(|v| 12.0 + v).collect();
-                        *d = with_columns(d, &[("heater_v", heater)]);
-                    }
-                    sim
-                }
-                _ => {
-                    let mut sim =
-                        simulated(&presets::preset("qma").unwrap().with_seed(seed)).unwrap();
-                    if control == "drift_lagging" {
-                        for d in [&mut sim.train, &mut sim.verify] {
-                            let air = d.column("t_chamber_c").unwrap().to_vec();
-                            *d = with_columns(d, &[("t_case_c", lag(&air, 1200.0))]);
-                        }
-                    }
-                    let floor = sim.verify_truth.noise.std_100s;
-                    let target = sim.train_truth.columns.target.clone();
-                    for (d, k) in [(&mut sim.train, 1u64), (&mut sim.verify, 2u64)] {
-                        let n = d.len();
-                        let w = drift(n, 10_800.0, 3.0 * floor, seed * 7 + k);
-                        let names = d.names().to_vec();
-                        let cols: Vec<Vec<f64>> = names
-                            .iter()
-                            .map(|c| {
-                                let v = d.column(c).unwrap();
-                                if *c == target {
-                                    v.iter().zip(&w).map(|(a, b)| a + b).collect()
-                                } else {
-                                    v.to_vec()
-                                }
-                            })
-                            .collect();
-                        *d = Dataset::from_columns(d.file(), names, cols);
-                    }
-                    sim
-                }
+            let Some((v, text)) = verdicts.get(k * seeds as usize + s as usize) else {
+                continue;
             };
-            let (v, text) = verdict(&sim);
             match v {
                 Verdict::MissingEffect => missing += 1,
                 Verdict::CannotTell => cannot += 1,
                 Verdict::None => {}
             }
-            println!("{control:<12} seed {seed}: {v:?} — {text}");
+            println!("{control:<12} seed {}: {v:?} — {text}", first + s);
         }
         let rate = missing as f64 / seeds as f64;
         println!(
