@@ -388,6 +388,9 @@ scenarios! {
     /// tell" between it and a kink in `heater_v` (199 nats and −83 % against 138 and −19 %),
     /// 5.41× with nothing added. The truth's shape is no candidate: a linear term in `heater_v`
     /// makes the held-out blocks worse (−130 %), as the heater's range differs block to block.
+    /// Since the refits offer the additive structure where the features read an input: named as
+    /// the heater acting directly and through lags of 380 s and 57 min (a listed family, the
+    /// shape's dynamics in three terms), 1.42× where the truth form reaches 1.38×.
     #[ignore = "a known miss: run with --ignored to measure it"]
     a_lagged_second_input: "lagged second input", Qma, [Poly], 95, "lag(heater_v, 900)", 6.0, true, 0.25;
 }
@@ -412,4 +415,32 @@ scenarios! {
     /// trainer told the truth 1.12×: on this run the relay is not worth its feature.
     #[ignore = "not identifiable here: run with --ignored to measure it"]
     a_mode_hop_on_another_thermometer: "mode hop on another thermometer", Rlg, [Poly], 105, "hyst(t_anode_c - 40, 3)", 6.0, false, 0.25;
+}
+
+// A seventh held-out set (2026-11-29, eighth session): kinds no earlier scenario has, written after
+// a failed refit was made to pass its slot on, and run once: 2 of 5 pass; figures in BENCHMARKS.md.
+// The kink in a second input led the refits to offer the additive structure, so it is development
+// since (3 of 5 now).
+scenarios! {
+    /// First run: named `hyst(rate(supply_v, 660), 0.0065)`, 1.25× where the truth form reaches
+    /// 1.09× (the test's bound is 1.2× the limit; the issue's 1.2× of the floor is missed).
+    a_relay_on_an_inputs_rate: "relay on an input's rate", Qma, [Poly], 111, "hyst(rate(supply_v, 600), 0.01)", 6.0, true, 0.25;
+    /// First run: named `clamp(rate(supply_v, 300), -0.00878, 0.00982)`, 1.10× (limit 1.08×).
+    a_saturating_input_rate: "saturating input rate", Qma, [Poly], 112, "clamp(rate(supply_v, 300), -0.01, 0.01)", 6.0, true, 0.25;
+    /// First run: "cannot tell" (a relay on T through a 100 s lag, no better than its placebos),
+    /// 7.60× with nothing added, where the truth form reaches 0.97× (told: 0.97×).
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    a_relay_on_an_input_times_a_temperature_rate: "relay on an input × temperature rate", Qma, [Poly], 113, "hyst(supply_v - 28.2, 0.2) * rate(t_qma_c)", 6.0, false, 0.25;
+    /// First run: named the two gradients (a listed family; the verification run 11 % better),
+    /// 6.11× where the truth form reaches 1.06× (told: 1.06×): the relay on the lagged gradient
+    /// led the compositions (+193.5 nats) but was no better than its placebos.
+    #[ignore = "a known miss: run with --ignored to measure it"]
+    a_relay_on_a_lagged_gradient: "relay on a lagged gradient", Rlg, [Poly], 114, "hyst(lag(t_anode_c - t_shell_c, 600) - 1, 0.5)", 6.0, false, 0.25;
+    /// First run: none, 8.23× where the truth form reaches 1.08×: the truth's own shape led (+486
+    /// nats, beating its placebos), but the joint model's refits over T and the heater predicted
+    /// every held-out block worse (−39.8 %: the heater's range differs block to block), where the
+    /// user's fit with it chooses the additive structure. Since the refits offer the additive
+    /// structure where the features read an input (development since): named exactly, 1.21×
+    /// (told: 1.21×).
+    a_kink_in_a_second_input: "kink in a second input", Qma, [Poly], 115, "abs(heater_v - 12.1)", 6.0, true, 0.25;
 }

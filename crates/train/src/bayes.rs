@@ -249,10 +249,16 @@ pub fn fit_binned(
         }
         best = search.other_centers(&grid, best, &mut evaluated)?;
     }
-    let additive = if opts.additive && opts.basis.is_none() {
+    let additive_pinned = opts.basis == Some(Basis::Additive);
+    let additive = if opts.additive && (opts.basis.is_none() || additive_pinned) {
         search.additive(&mut evaluated)
     } else {
         None
+    };
+    let pinned = if pinned {
+        Some(Basis::Cubic)
+    } else {
+        opts.basis.filter(|_| additive_pinned)
     };
     search.choose(best, cubic, additive, margin, evaluated, pinned)
 }
@@ -397,8 +403,9 @@ crate::layer! {
         )]
         pub additive: Option<bool>,
         /// Pin bayes's basis instead of letting the evidence choose it: `cubic` (the cubic in the
-        /// first feature, no Gaussians) or `gaussians` (the Gaussian search, no cubic); the
-        /// additive structure is not offered beside a pinned basis. Spec key `basis`.
+        /// first feature, no Gaussians), `gaussians` (the Gaussian search, no cubic; the additive
+        /// structure is not offered) or `additive` (the additive structure whenever its search
+        /// finds a term). Spec key `basis`.
         #[cfg_attr(feature = "cli", arg(long))]
         pub basis: Option<String>,
     }
@@ -415,10 +422,11 @@ impl Bayes {
         self.cubic.unwrap_or(true)
     }
 
-    /// Whether the additive structure is offered beside the joint model [default: yes, unless a
-    /// basis is pinned].
+    /// Whether the additive structure is offered beside the joint model [default: yes, unless
+    /// another basis is pinned].
     pub fn additive(&self) -> bool {
-        self.additive.unwrap_or(true) && self.basis.is_none()
+        self.additive.unwrap_or(true)
+            && matches!(self.basis().ok().flatten(), None | Some(Basis::Additive))
     }
 
     /// The basis pinned (`basis`), if any.
@@ -463,8 +471,15 @@ impl crate::method::FitMethod for Bayes {
     ) -> Result<crate::method::MethodFit, crate::error::TrainError> {
         let first_free = opts.pins.first() != Some(&crate::pin::Pin::Linear);
         let basis = self.basis()?;
+        if basis == Some(Basis::Additive) && !self.additive() {
+            return Err(crate::error::TrainError::MethodNeeds {
+                method: "bayes with basis = additive",
+                what: "the additive structure offered (not `additive = false`)",
+            });
+        }
         let offer = match basis {
             Some(Basis::Gaussians) => false,
+            Some(Basis::Additive) => self.cubic(),
             Some(Basis::Cubic) => {
                 if !(self.linear() && opts.centers.is_none() && first_free) {
                     return Err(crate::error::TrainError::MethodNeeds {

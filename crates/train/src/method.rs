@@ -167,6 +167,10 @@ pub enum Basis {
     /// `T²` and `T³` of the first feature clamped to its trained range (the PX4/ArduPilot cubic),
     /// under the same prior as the linear term, and no Gaussians.
     Cubic,
+    /// The additive structure (`bayes::additive`): a sum of one-feature terms beside the linear
+    /// term. Pinned, it is taken whenever its search finds a term; chosen, it beat the joint
+    /// model by the Occam margin.
+    Additive,
 }
 
 /// How the structure was chosen, for the report: each structure compared with its log evidence.
@@ -185,10 +189,11 @@ impl FromStr for Basis {
         match s {
             "gaussians" => Ok(Self::Gaussians),
             "cubic" => Ok(Self::Cubic),
+            "additive" => Ok(Self::Additive),
             _ => Err(TrainError::Unknown {
                 what: "basis",
                 name: s.into(),
-                known: "cubic, gaussians".into(),
+                known: "additive, cubic, gaussians".into(),
             }),
         }
     }

@@ -1,5 +1,7 @@
 //! `--basis` (spec key `basis`) pins bayes's basis instead of letting the evidence choose it: the
-//! cubic in the first feature, or the Gaussian search without it. The diagnosis pins the held-out
+//! cubic in the first feature, the Gaussian search without it, or the additive structure
+//! (taken whenever its search finds a term, where free it must beat the joint model by the
+//! Occam margin). The diagnosis pins the held-out
 //! blocks' refits to the basis the whole training run's evidence chose (`tcomp_discover`'s
 //! `confirm`); a user pins it when they know better. A name it does not know, or a cubic it
 //! cannot build, is refused with the option named.
@@ -34,10 +36,12 @@ fn options(basis: Option<&str>) -> FitOptions {
 fn a_pinned_basis_is_the_one_fitted() {
     let d = data();
     let free = fit(&d, &options(None)).unwrap();
-    assert_eq!(
-        free.summary.details.basis,
-        Some(Basis::Gaussians),
-        "the evidence alone should prefer Gaussians on a smooth step: {:?}",
+    assert!(
+        matches!(
+            free.summary.details.basis,
+            Some(Basis::Gaussians | Basis::Additive)
+        ),
+        "the evidence alone should prefer Gaussians (joint or additive) on a smooth step: {:?}",
         free.summary.details.structure
     );
     let cubic = fit(&d, &options(Some("cubic"))).unwrap();
@@ -45,6 +49,18 @@ fn a_pinned_basis_is_the_one_fitted() {
     assert_eq!(cubic.summary.centers, 0);
     let gaussians = fit(&d, &options(Some("gaussians"))).unwrap();
     assert_eq!(gaussians.summary.details.basis, Some(Basis::Gaussians));
+    let additive = fit(&d, &options(Some("additive"))).unwrap();
+    assert_eq!(additive.summary.details.basis, Some(Basis::Additive));
+    assert!(
+        additive
+            .summary
+            .details
+            .structure
+            .as_ref()
+            .is_some_and(|s| s.chosen.starts_with("additive")),
+        "{:?}",
+        additive.summary.details.structure
+    );
     // No cubic was offered: none was compared.
     assert!(
         gaussians
@@ -64,11 +80,15 @@ fn an_unknown_basis_or_an_impossible_cubic_is_refused_by_name() {
     let d = data();
     let e = fit(&d, &options(Some("spline"))).unwrap_err().to_string();
     assert!(
-        e.contains("basis") && e.contains("spline") && e.contains("cubic, gaussians"),
+        e.contains("basis") && e.contains("spline") && e.contains("additive, cubic, gaussians"),
         "{e}"
     );
     let mut o = options(Some("cubic"));
     o.centers = Some(4);
     let e = fit(&d, &o).unwrap_err().to_string();
     assert!(e.contains("basis = cubic"), "{e}");
+    let mut o = options(Some("additive"));
+    o.settings.bayes.additive = Some(false);
+    let e = fit(&d, &o).unwrap_err().to_string();
+    assert!(e.contains("basis = additive"), "{e}");
 }

@@ -110,7 +110,7 @@ fn check_target_units(f: impl Fn(&[f64]) -> f64 + Copy, offer: bool, basis: Basi
     for (r, pr) in x.iter().zip(&p) {
         let row: Vec<f64> = match basis {
             Basis::Cubic => r.iter().chain(pr).copied().collect(),
-            Basis::Gaussians => r.clone(),
+            Basis::Gaussians | Basis::Additive => r.clone(),
         };
         let (y0, y1) = (base.rbf.eval(&row), scaled.rbf.eval(&row));
         assert!(
@@ -127,7 +127,7 @@ fn check_target_units(f: impl Fn(&[f64]) -> f64 + Copy, offer: bool, basis: Basi
         .map(|((r, pr), y)| {
             let row: Vec<f64> = match basis {
                 Basis::Cubic => r.iter().chain(pr).copied().collect(),
-                Basis::Gaussians => r.clone(),
+                Basis::Gaussians | Basis::Additive => r.clone(),
             };
             (base.rbf.eval(&row) - y).powi(2)
         })

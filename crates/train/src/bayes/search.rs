@@ -418,7 +418,8 @@ impl<'o> Search<'o> {
     }
 
     /// Parsimony: the simplest model whose evidence is not strongly worse than the best's, in the
-    /// order linear alone (0 centers), the cubic, then ever more centers.
+    /// order linear alone (0 centers), the cubic, then ever more centers. `pinned`: the cubic
+    /// (when offered) or the additive structure (when its search found a term) is taken as is.
     pub(super) fn choose(
         &self,
         mut best: Candidate,
@@ -426,8 +427,10 @@ impl<'o> Search<'o> {
         additive: Option<Additive>,
         margin: f64,
         evaluated: usize,
-        cubic_pinned: bool,
+        pinned: Option<Basis>,
     ) -> Option<BayesFit> {
+        let cubic_pinned = pinned == Some(Basis::Cubic);
+        let additive_pinned = pinned == Some(Basis::Additive);
         let n = self.n();
         let per: Vec<Candidate> = self
             .best_per_m
@@ -493,8 +496,8 @@ impl<'o> Search<'o> {
         }
         let pick_ev = pick_ev.map(|(_, e, _)| e);
         compared.sort_by(|a, b| b.1.total_cmp(&a.1));
-        if let (Some(a), Some(pick_ev)) = (additive, pick_ev)
-            && self.occam(&a) > pick_ev + margin
+        if let Some(a) = additive
+            && (additive_pinned || pick_ev.is_some_and(|p| self.occam(&a) > p + margin))
             && Self::has_atoms(&a)
         {
             let (rbf, evidence) = self.additive_fit(&a);
@@ -514,7 +517,7 @@ impl<'o> Search<'o> {
                     })
                     .collect(),
                 evaluated,
-                basis: Basis::Gaussians,
+                basis: Basis::Additive,
                 other_basis_log_evidence: cubic.map(|c| units(ev(&c.fit))),
                 structure: StructureReport { chosen, compared },
             });
