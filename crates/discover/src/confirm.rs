@@ -115,8 +115,6 @@ pub(crate) struct Refits<'a> {
     roles: &'a Roles,
     data: &'a Dataset,
     gap_s: Option<f64>,
-    /// The run's non-thermal input columns ([`crate::candidates::Sources::inputs`]).
-    inputs: Vec<String>,
 }
 
 impl<'a> Refits<'a> {
@@ -127,28 +125,12 @@ impl<'a> Refits<'a> {
         data: &'a Dataset,
         gap_s: Option<f64>,
     ) -> Self {
-        let mut exclude = vec![roles.time.as_str(), roles.target.as_str()];
-        if let Some(r) = &roles.reference {
-            exclude.push(r.as_str());
-        }
-        let inputs = crate::candidates::sources(data, &exclude, &info.spec.signals).inputs;
         Refits {
             info,
             roles,
             data,
             gap_s,
-            inputs,
         }
-    }
-
-    /// Whether `features` read a non-thermal input column.
-    fn read_an_input(&self, features: &[String]) -> bool {
-        let spec = tcomp_train::features::FeatureSpec {
-            signals: self.info.spec.signals.clone(),
-            features: features.to_vec(),
-        };
-        spec.program()
-            .is_ok_and(|p| p.inputs.iter().any(|i| self.inputs.iter().any(|n| n == i)))
     }
 
     /// The trainer's options for the feature list `features` (the model's signals kept).
@@ -166,8 +148,12 @@ impl<'a> Refits<'a> {
         o.spec.signals.clone_from(&self.info.spec.signals);
         o.spec.features = features.to_vec();
         // The joint model's evidence only: refits of different feature sets are compared on it,
-        // and the additive structure's (under AR(1) noise) is another yardstick. The additive
-        // structure only where it is pinned ([`Refits::whole`]).
+        // and the additive structure's (under AR(1) noise) is another yardstick. Offering it as
+        // the user's fit does (where the features read an input, and the blocks' refits pinned
+        // to it) named a kink in a second input exactly, 1.21× the floor where the joint refits
+        // left it unnamed at 8.23× — but its search in every block's and placebo's refit took a
+        // 1,000-unit `calibrate` from 5 min to 8 min 47 s. Pinning the whole run's additive
+        // design itself, not re-searching it per block, is what would make it affordable.
         o.settings.bayes.additive = Some(basis == Some(Basis::Additive));
         o.settings.bayes.basis = basis.map(|b| {
             match b {
@@ -190,21 +176,8 @@ impl<'a> Refits<'a> {
     /// block chose Gaussians in T over the cubic (by 36 nats, where the whole run chose the
     /// cubic) and predicted the block at 38.0 against the model's 20.8, while the candidate
     /// halved the other four blocks' residuals: the pooled figure rejected it. The basis is chosen
-    /// on the training run, once, as the user's own fit chooses it — the additive structure
-    /// among the choices, as in the user's fit. Measured: with the truth's own `abs(heater_v −
-    /// 12.1)` (+486 nats), the joint model's refits over T and the heater predicted every held-out
-    /// block worse (−39.8 %, the heater's range differs block to block), where the user's fit
-    /// chooses the additive structure. The evidence returned is the joint model's even then: it
-    /// is the yardstick every refit is compared on.
-    ///
-    /// The additive structure is offered only where the features read a non-thermal input: there
-    /// a joint model extrapolates to input values a block's rest never had, while temperature
-    /// ramps repeat block to block. Its search is the cost: offered for every refit, `tcomp
-    /// diagnose` on the RLG preset took 2.4 s (1.6 s without), over its 2 s budget; offered but
-    /// for the parameters' cross-validation ([`Refits::judged`]), 1.9 s.
-    /// The joint model's refit of `features` on the whole run (its evidence and basis), what the
-    /// parameters' cross-validation is judged in ([`Refits::judged`]).
-    fn whole_joint(&self, features: &[String]) -> (f64, Option<Basis>) {
+    /// on the training run, once, as the user's own fit chooses it.
+    fn whole(&self, features: &[String]) -> (f64, Option<Basis>) {
         tcomp_train::fit_unmeasured(self.data, &self.options(features))
             .ok()
             .map_or((f64::NEG_INFINITY, None), |(_, details)| {
@@ -217,36 +190,9 @@ impl<'a> Refits<'a> {
             })
     }
 
-    fn whole(&self, features: &[String]) -> (f64, Option<Basis>) {
-        if !self.read_an_input(features) {
-            return self.whole_joint(features);
-        }
-        let fit = |o: &FitOptions| {
-            tcomp_train::fit_unmeasured(self.data, o).ok().map_or(
-                (f64::NEG_INFINITY, None),
-                |(_, details)| {
-                    (
-                        details
-                            .evidence
-                            .map_or(f64::NEG_INFINITY, |e| e.log_evidence),
-                        details.basis,
-                    )
-                },
-            )
-        };
-        let mut offered = self.options(features);
-        offered.settings.bayes.additive = None;
-        let (evidence, basis) = fit(&offered);
-        if basis == Some(Basis::Additive) {
-            (fit(&self.options(features)).0, basis)
-        } else {
-            (evidence, basis)
-        }
-    }
-
     /// [`heldout_std`] with the basis the whole run's refit of `features` chose.
     fn judged(&self, splits: &[Split], features: &[String]) -> Result<HeldOutFigures> {
-        let (_, basis) = self.whole_joint(features);
+        let (_, basis) = self.whole(features);
         heldout_std(self, splits, features, basis)
     }
 

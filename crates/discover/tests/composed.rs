@@ -388,9 +388,9 @@ scenarios! {
     /// tell" between it and a kink in `heater_v` (199 nats and −83 % against 138 and −19 %),
     /// 5.41× with nothing added. The truth's shape is no candidate: a linear term in `heater_v`
     /// makes the held-out blocks worse (−130 %), as the heater's range differs block to block.
-    /// Since the refits offer the additive structure where the features read an input: named as
-    /// the heater acting directly and through lags of 380 s and 57 min (a listed family, the
-    /// shape's dynamics in three terms), 1.42× where the truth form reaches 1.38×.
+    /// With the refits offering the additive structure where the features read an input (tried,
+    /// not kept: see `a_kink_in_a_second_input`): named as the heater acting directly and through
+    /// lags of 380 s and 57 min (a listed family), 1.42× where the truth form reaches 1.38×.
     #[ignore = "a known miss: run with --ignored to measure it"]
     a_lagged_second_input: "lagged second input", Qma, [Poly], 95, "lag(heater_v, 900)", 6.0, true, 0.25;
 }
@@ -419,8 +419,6 @@ scenarios! {
 
 // A seventh held-out set (2026-11-29, eighth session): kinds no earlier scenario has, written after
 // a failed refit was made to pass its slot on, and run once: 2 of 5 pass; figures in BENCHMARKS.md.
-// The kink in a second input led the refits to offer the additive structure, so it is development
-// since (3 of 5 now).
 scenarios! {
     /// First run: named `hyst(rate(supply_v, 660), 0.0065)`, 1.25× where the truth form reaches
     /// 1.09× (the test's bound is 1.2× the limit; the issue's 1.2× of the floor is missed).
@@ -439,8 +437,9 @@ scenarios! {
     /// First run: none, 8.23× where the truth form reaches 1.08×: the truth's own shape led (+486
     /// nats, beating its placebos), but the joint model's refits over T and the heater predicted
     /// every held-out block worse (−39.8 %: the heater's range differs block to block), where the
-    /// user's fit with it chooses the additive structure. Since the refits offer the additive
-    /// structure where the features read an input (development since): named exactly, 1.21×
-    /// (told: 1.21×).
+    /// user's fit with it chooses the additive structure. With the refits offering the additive
+    /// structure where the features read an input (the blocks' refits pinned to it): named
+    /// exactly, 1.21× (told: 1.21×), but a 1,000-unit `calibrate` took 8 min 47 s: not kept.
+    #[ignore = "a known miss: run with --ignored to measure it"]
     a_kink_in_a_second_input: "kink in a second input", Qma, [Poly], 115, "abs(heater_v - 12.1)", 6.0, true, 0.25;
 }
