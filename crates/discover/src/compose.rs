@@ -91,8 +91,10 @@
 //! the lag it equals with the model's own `T`), a narrow mode hop, a saturating gradient, a
 //! saturating lagging element, a lagged mode hop, a lagged warm-up (named as one warm-up), a
 //! saturating temperature rate, a lagged heater voltage and the square of a gradient's rate
-//! ("cannot tell"), a relay on the supply times the temperature (none), a relay on a gradient
-//! away from zero (a narrow clamp of the gradient times the supply).
+//! ("cannot tell"), a relay on the supply times the temperature (none) or times its rate, a relay
+//! on a gradient away from zero (a narrow clamp of the gradient times the supply) or on a lagged
+//! gradient, and a kink in a second input (it leads here, and the joint model's held-out refits
+//! reject it: see [`crate::confirm`]).
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
