@@ -609,7 +609,8 @@ mod tests {
         let f = |t: f64| 0.5 * (-(t - 25.0) * (t - 25.0) / 18.0).exp() + 0.01 * t;
         let (x, p, y) = case(f, 0.01);
         let fit = fit_offering_cubic(&x, &y, Some(&p), &BayesOptions::default()).unwrap();
-        assert_eq!(fit.basis, Basis::Gaussians);
+        // Gaussians, joint or in the additive structure.
+        assert_ne!(fit.basis, Basis::Cubic);
         assert!(!fit.rbf.centers.is_empty());
         let other = fit.other_basis_log_evidence.unwrap();
         assert!(fit.evidence.log_evidence > other + PARSIMONY);
@@ -647,7 +648,8 @@ mod tests {
     fn without_the_offer_the_basis_is_gaussian() {
         let (x, _, y) = case(|t| 1e-5 * t * t * t, 0.01);
         let fit = fit(&x, &y, &BayesOptions::default()).unwrap();
-        assert_eq!(fit.basis, Basis::Gaussians);
+        // Gaussians, joint or in the additive structure.
+        assert_ne!(fit.basis, Basis::Cubic);
         assert!(fit.other_basis_log_evidence.is_none());
     }
 }
