@@ -157,9 +157,13 @@ impl<'a> Refits<'a> {
         // cannot weigh left out) made it affordable — `diagnose` 1.8 s, 100 units 31 s against
         // 29 — and passed three more composed scenarios (one lost), but on the negative
         // controls "cannot tell" went from 23 to 49 of 100 and "missing" from 1 to 2 (53 of 100
-        // units "cannot tell"), with the model's features compared in the same structure: the
-        // additive terms' refits predict the held-out blocks unlike the joint ones, and slow
-        // candidates clear the held-out leg by chance. Not kept.
+        // units "cannot tell"), with the model's features compared in the same structure. Why:
+        // on the plain controls the same spurious candidates that made the joint refits' blocks
+        // worse (−117 %, −386 %, −932 %) made the additive refits' blocks better (−24 % to −48 %
+        // of the residual): a feature enters an additive model through a term of its own, and a
+        // slow one absorbs a block's extrapolation error by chance, where in a joint model it
+        // spoils the Gaussians. The held-out leg's strength here comes from the joint refits;
+        // with the additive ones only the placebo leg stands. Not kept.
         o.settings.bayes.additive = Some(basis == Some(Basis::Additive));
         o.settings.bayes.basis = basis.map(|b| {
             match b {
