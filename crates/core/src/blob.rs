@@ -37,8 +37,11 @@ pub const MAGIC: [u8; 4] = *b"TCMB";
 /// bit for bit. Version 3 added the per-center feature masks of additive models ([`Rbf::masks`]),
 /// written after the residual level; a model without masks keeps its older version and bytes.
 /// Version 4 added the kind of each center ([`Rbf::kinds`]: Gaussian or logistic step), written
-/// after the masks; a model without steps keeps its older version and bytes.
-pub const FORMAT_VERSION: u16 = 4;
+/// after the masks; a model without steps keeps its older version and bytes. Version 5 added the
+/// saturating ramp kind ([`crate::rbf::KIND_RAMP`]) with no change of layout: a model without a
+/// ramp keeps its older version and bytes, and a format-4 reader refuses one with a ramp by its
+/// version instead of by an unknown kind.
+pub const FORMAT_VERSION: u16 = 5;
 /// The oldest blob format version this build reads: the layout of [`Model`] has not changed since
 /// (formats 3 and 4 append fields after it; a blob of an older version has none).
 pub const OLDEST_FORMAT_VERSION: u16 = 1;
@@ -46,6 +49,8 @@ pub const OLDEST_FORMAT_VERSION: u16 = 1;
 pub const MASKS_SINCE: u16 = 3;
 /// The first format whose blobs carry [`Rbf::kinds`] after the masks.
 pub const KINDS_SINCE: u16 = 4;
+/// The first format whose [`Rbf::kinds`] may hold [`crate::rbf::KIND_RAMP`].
+pub const RAMPS_SINCE: u16 = 5;
 
 const _: () = assert!(
     crate::lang::NEWEST_SINCE <= FORMAT_VERSION && OLDEST_FORMAT_VERSION <= FORMAT_VERSION,
@@ -288,10 +293,17 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
     }
 
     /// The oldest format that can carry `program` and `rbf`: its newest operation's, and
-    /// [`MASKS_SINCE`] for an additive model, [`KINDS_SINCE`] for one with steps.
+    /// [`MASKS_SINCE`] for an additive model, [`KINDS_SINCE`] for one with steps,
+    /// [`RAMPS_SINCE`] for one with ramps.
     pub fn version_for(program: &Program<'a, N, F>, rbf: &Rbf<C, F>) -> u16 {
         let masks = if rbf.masks.is_empty() { 0 } else { MASKS_SINCE };
-        let kinds = if rbf.kinds.is_empty() { 0 } else { KINDS_SINCE };
+        let kinds = if rbf.kinds.contains(&crate::rbf::KIND_RAMP) {
+            RAMPS_SINCE
+        } else if rbf.kinds.is_empty() {
+            0
+        } else {
+            KINDS_SINCE
+        };
         program
             .format_version()
             .max(OLDEST_FORMAT_VERSION)
@@ -327,6 +339,11 @@ impl<'a, const C: usize, const F: usize, const N: usize> Model<'a, C, F, N> {
         if !self.rbf.kinds.is_empty() && self.version < KINDS_SINCE {
             return Err(BlobError::Inconsistent(
                 "version: older than the model's steps (format 4)",
+            ));
+        }
+        if self.rbf.kinds.contains(&crate::rbf::KIND_RAMP) && self.version < RAMPS_SINCE {
+            return Err(BlobError::Inconsistent(
+                "version: older than the model's ramps (format 5)",
             ));
         }
         let nf = self.program.n_features();

@@ -62,7 +62,7 @@
 
 use crate::blob::FeatureRange;
 use crate::fastexp::{EVAL_CUTOFF, EXP2_REL_ERR};
-use crate::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP, Rbf};
+use crate::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_RAMP, KIND_SQUARE, KIND_STEP, Rbf};
 
 /// The largest `|correction|` a model may produce anywhere in its range box, in target units: four
 /// orders of magnitude above the largest full scale of any sensor in any unit the project uses
@@ -199,6 +199,8 @@ pub fn check<const C: usize, const F: usize>(
                 KIND_STEP => 1.0 + 2.0 * EXP2_REL_ERR,
                 KIND_SQUARE => a_max * a_max * (1.0 + rounding(4)),
                 KIND_CUBE => a_max * a_max * a_max * (1.0 + rounding(6)),
+                // `clamp(u, −1, 1)` is exact: at most 1 whatever `u`'s rounding.
+                KIND_RAMP => 1.0,
                 _ => return Err("rbf.kinds: unknown kind"),
             };
             if !below(value, F32_LIMIT) {

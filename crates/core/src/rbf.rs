@@ -43,6 +43,15 @@
 //! power. Like the Gaussians they see the features clamped to the trained range
 //! ([`Rbf::eval_split`]), so they hold their edge values outside it as the clamped cubic does.
 //!
+//! Kind [`KIND_RAMP`] (blob format 5) is the saturating ramp `wj·clamp(uj, −1, 1)` of the same
+//! natural-units `uj`: a level that changes linearly between two temperatures and holds on both
+//! sides (a knee, a saturation — the language's `clamp` as a term). Why beside the step: a
+//! logistic rises over its whole width with soft shoulders, so a change of slope that ends at a
+//! sharp corner (a clamped ramp 16 °C wide, measured in `tcomp-train`'s `additive_fits`) costs a
+//! step plus Gaussians at each corner, and the Gaussians fade beyond the range. A ramp holds
+//! its levels outside `[−1, 1]` as a step does, so it extrapolates flat, never along a slope as
+//! a hinge would. Two comparisons, no exponential.
+//!
 //! Summation order is fixed and no fused multiply-add is used: host and Cortex-M4F give identical
 //! bits. A center whose exponent exceeds [`EXP_CUTOFF`] contributes less than `2e-9·|w|` and is skipped.
 
@@ -56,8 +65,11 @@ pub const KIND_STEP: u8 = 1;
 pub const KIND_SQUARE: u8 = 2;
 /// [`Rbf::kinds`]: the cube `u³` of `u = p + Σ qk·zk` (natural units; see the module doc).
 pub const KIND_CUBE: u8 = 3;
+/// [`Rbf::kinds`]: the ramp `clamp(u, −1, 1)` of `u = p + Σ qk·zk` (natural units; see the
+/// module doc), blob format 5.
+pub const KIND_RAMP: u8 = 4;
 /// The largest kind this build evaluates.
-pub const KIND_LAST: u8 = KIND_CUBE;
+pub const KIND_LAST: u8 = KIND_RAMP;
 use crate::point::Point;
 use heapless::Vec;
 use serde::{Deserialize, Serialize};
@@ -120,7 +132,8 @@ impl<const F: usize> Center<F> {
         }
     }
 
-    /// A power `w·(b + Σk ak·zk)^n` (kind [`KIND_SQUARE`] or [`KIND_CUBE`]), natural units, `g = 0`.
+    /// A power `w·(b + Σk ak·zk)^n` (kind [`KIND_SQUARE`] or [`KIND_CUBE`]) or a ramp
+    /// `w·clamp(b + Σk ak·zk, −1, 1)` ([`KIND_RAMP`]), natural units, `g = 0`.
     pub fn power_from_natural(a: &[f64], b: f64, w: f64) -> Self {
         let mut q = [0.0f32; F];
         for (qk, ak) in q.iter_mut().zip(a) {
@@ -160,8 +173,9 @@ pub struct Rbf<const C: usize, const F: usize> {
     /// [`crate::blob`]), so the derived layout of this struct is the one formats 1 and 2 have.
     #[serde(skip)]
     pub masks: Vec<u8, C>,
-    /// Kind of each center ([`KIND_GAUSSIAN`] or [`KIND_STEP`]), or empty: every center is a
-    /// Gaussian. Only with [`Rbf::masks`]; stored after them, from format 4 on.
+    /// Kind of each center ([`KIND_GAUSSIAN`], [`KIND_STEP`], [`KIND_SQUARE`], [`KIND_CUBE`] or
+    /// [`KIND_RAMP`]), or empty: every center is a Gaussian. Only with [`Rbf::masks`]; stored
+    /// after them, from format 4 on (ramps from format 5).
     #[serde(skip)]
     pub kinds: Vec<u8, C>,
 }
@@ -221,6 +235,21 @@ fn step<const F: usize>(c: &Center<F>, z: &[f32; F]) -> f32 {
         0.0
     };
     c.w * s
+}
+
+/// `clamp(u, −1, 1)`, with a NaN argument giving 0 as a step's does. Two comparisons: no
+/// exponential, no division.
+#[inline(always)]
+fn ramp(u: f32) -> f32 {
+    if u >= 1.0 {
+        1.0
+    } else if u <= -1.0 {
+        -1.0
+    } else if u > -1.0 {
+        u
+    } else {
+        0.0
+    }
 }
 
 /// Why RBF coefficients are unusable; the `&str` names the field.
@@ -335,6 +364,7 @@ impl<const C: usize, const F: usize> Rbf<C, F> {
                     let u = affine(c, z);
                     c.w * (u * u * u)
                 }
+                KIND_RAMP => c.w * ramp(affine(c, z)),
                 _ => masked_gaussian(c, mask, &sq, z),
             };
         }

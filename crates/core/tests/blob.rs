@@ -214,7 +214,7 @@ fn every_reason_has_its_message() {
         (BlobError::BadMagic, "not a tcomp model blob (bad magic)"),
         (
             BlobError::UnsupportedVersion(7),
-            "unsupported blob format version 7 (this build reads 4)",
+            "unsupported blob format version 7 (this build reads 5)",
         ),
         (
             BlobError::Checksum,
@@ -234,7 +234,7 @@ fn every_reason_has_its_message() {
     reseal(&mut v9);
     assert_eq!(
         HostModel::decode(&v9).unwrap_err().to_string(),
-        "unsupported blob format version 9 (this build reads 4)"
+        "unsupported blob format version 9 (this build reads 5)"
     );
     v9[4] = 1;
     assert_eq!(

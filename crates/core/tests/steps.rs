@@ -8,7 +8,7 @@ mod trailing_support;
 
 use tcomp_core::blob::{KINDS_SINCE, MASKS_SINCE};
 use tcomp_core::point::Point;
-use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP, RbfError};
+use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_LAST, KIND_SQUARE, KIND_STEP, RbfError};
 use tcomp_core::testing::example_model;
 use tcomp_core::{BlobError, Center, HOST_CENTERS, HOST_FEATURES, HOST_NODES, HostModel, Rbf};
 
@@ -152,7 +152,7 @@ fn kind_rules_are_enforced() {
         "rbf.kinds"
     ));
     assert!(incon(bad(&|r| r.masks.clear()), "rbf.kinds"));
-    assert!(incon(bad(&|r| r.kinds[1] = KIND_CUBE + 1), "rbf.kinds"));
+    assert!(incon(bad(&|r| r.kinds[1] = KIND_LAST + 1), "rbf.kinds"));
     // A step must have g = 0, a Gaussian g > 0 and p ≥ 0 (a step's p may be negative).
     assert!(incon(bad(&|r| r.centers[1].g = 1.0), "rbf.centers"));
     assert!(incon(bad(&|r| r.kinds[1] = KIND_GAUSSIAN), "rbf.centers"));

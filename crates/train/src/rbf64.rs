@@ -10,7 +10,7 @@ use crate::features::F;
 use nalgebra::DMatrix;
 use tcomp_core::point::Point;
 use tcomp_core::rbf::Center;
-pub use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP};
+pub use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_RAMP, KIND_SQUARE, KIND_STEP};
 use tcomp_core::{HOST_CENTERS, Rbf};
 
 /// Centers per host model.
@@ -37,10 +37,11 @@ pub struct Rbf64 {
     /// outside it are zero), or empty: every center spans every feature. An additive model's
     /// groups (see [`crate::bayes`]), carried to the core's [`Rbf::masks`].
     pub masks: Vec<u8>,
-    /// Kind per center ([`KIND_GAUSSIAN`], [`KIND_STEP`], [`KIND_SQUARE`] or [`KIND_CUBE`]), or
-    /// empty: every center is a Gaussian. With `uj = γj·Σ_{k∈Mj}(zk − cjk)`, a step is `S(uj)`,
-    /// `S(u) = 1/(1 + e^(−u))` (it rises over a width `1/γj` around `cj` and holds its level on
-    /// both sides), a square `uj²` and a cube `uj³` (the core's [`Rbf::kinds`]).
+    /// Kind per center ([`KIND_GAUSSIAN`], [`KIND_STEP`], [`KIND_SQUARE`], [`KIND_CUBE`] or
+    /// [`KIND_RAMP`]), or empty: every center is a Gaussian. With `uj = γj·Σ_{k∈Mj}(zk − cjk)`, a
+    /// step is `S(uj)`, `S(u) = 1/(1 + e^(−u))` (it rises over a width `1/γj` around `cj` and
+    /// holds its level on both sides), a square `uj²`, a cube `uj³` and a ramp
+    /// `clamp(uj, −1, 1)` (straight over `cj ± 1/γj`, level beyond; the core's [`Rbf::kinds`]).
     pub kinds: Vec<u8>,
 }
 
@@ -52,6 +53,11 @@ pub fn logistic(u: f64) -> f64 {
         let e = u.exp();
         e / (1.0 + e)
     }
+}
+
+/// The ramp `clamp(u, −1, 1)` (NaN gives 0, as the core's does).
+pub fn ramp(u: f64) -> f64 {
+    if u.is_nan() { 0.0 } else { u.clamp(-1.0, 1.0) }
 }
 
 /// A step's argument `γ·Σ_{k∈mask}(zk − ck)`.
@@ -100,6 +106,7 @@ impl Rbf64 {
             KIND_STEP => logistic(step_arg(z, c, *g, mask)),
             KIND_SQUARE => step_arg(z, c, *g, mask).powi(2),
             KIND_CUBE => step_arg(z, c, *g, mask).powi(3),
+            KIND_RAMP => ramp(step_arg(z, c, *g, mask)),
             _ => (-g * masked_dist2(z, c, mask)).exp(),
         }
     }

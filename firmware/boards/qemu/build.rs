@@ -67,12 +67,12 @@ fn main() {
     fs::write(out.join("smoke_vector.bin"), &vector).expect("write vector");
 }
 
-/// The example model made additive with every kind of term (blob format 4): each center over one
-/// feature, the features in turn; the even centers logistic steps, the odd ones Gaussians, the last
-/// two a square and a cube. With it, the host's output at [`kinds_points`] (f32 bits, LE), which
+/// The example model made additive with every kind of term (blob format 5): each center over one
+/// feature, the features in turn; the even centers logistic steps and saturating ramps in turn,
+/// the odd ones Gaussians, the last two a square and a cube. With it, the host's output at [`kinds_points`] (f32 bits, LE), which
 /// the firmware must reproduce.
 fn kinds_blob(model: &Model<'static, 32, 4, 24>) -> (Vec<u8>, Vec<u8>) {
-    use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP};
+    use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_RAMP, KIND_SQUARE, KIND_STEP};
     let mut m = model.clone();
     let nf = m.n_features();
     let n = m.rbf.centers.len();
@@ -85,8 +85,10 @@ fn kinds_blob(model: &Model<'static, 32, 4, 24>) -> (Vec<u8>, Vec<u8>) {
             KIND_SQUARE
         } else if j + 1 == n {
             KIND_CUBE
-        } else if j % 2 == 0 {
+        } else if j % 4 == 0 {
             KIND_STEP
+        } else if j % 4 == 2 {
+            KIND_RAMP
         } else {
             KIND_GAUSSIAN
         };
@@ -94,11 +96,14 @@ fn kinds_blob(model: &Model<'static, 32, 4, 24>) -> (Vec<u8>, Vec<u8>) {
             a[k] = ck;
             tcomp_core::Center::from_natural(&a, f64::from(gamma), w)
         } else {
-            // A step as wide as the Gaussian (slope 1/σ), a power of z − c; weights kept small.
+            // A step or a ramp as wide as the Gaussian (slope 1/σ), a power of z − c; the powers'
+            // weights kept small.
             let slope = f64::from(gamma).sqrt();
             a[k] = slope;
             if kind == KIND_STEP {
                 tcomp_core::Center::step_from_natural(&a, -slope * ck, w)
+            } else if kind == KIND_RAMP {
+                tcomp_core::Center::power_from_natural(&a, -slope * ck, w)
             } else {
                 tcomp_core::Center::power_from_natural(&a, -slope * ck, 0.01 * w)
             }

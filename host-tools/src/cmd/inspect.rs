@@ -8,7 +8,7 @@ use clap::Args as ClapArgs;
 use serde_json::json;
 use std::path::PathBuf;
 use tcomp_core::HostModel;
-use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP};
+use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_RAMP, KIND_SQUARE, KIND_STEP};
 
 use crate::output::printable::text;
 
@@ -236,12 +236,13 @@ fn kind_name(k: u8) -> &'static str {
         KIND_STEP => "step",
         KIND_SQUARE => "square",
         KIND_CUBE => "cube",
+        KIND_RAMP => "ramp",
         _ => "gaussian",
     }
 }
 
-/// A step's or a power's argument `u = b + Σ ak·zk` in natural units, as `(a, b)` over the used
-/// features (a step is `S(u)`, stored in the fast exponential's units).
+/// A step's, a ramp's or a power's argument `u = b + Σ ak·zk` in natural units, as `(a, b)` over
+/// the used features (a step is `S(u)`, stored in the fast exponential's units).
 fn affine(m: &HostModel<'_>, j: usize) -> (Vec<f32>, f32) {
     let c = &m.rbf.centers[j];
     let unit = if kind(m, j) == KIND_STEP {
@@ -263,7 +264,7 @@ fn spanned(m: &HostModel<'_>, j: usize) -> Vec<usize> {
     (0..m.n_features()).filter(|&k| m.rbf.spans(j, k)).collect()
 }
 
-/// The model's structure in words, from the centers' masks (format 3) and kinds (format 4):
+/// The model's structure in words, from the centers' masks (format 3) and kinds (formats 4 and 5):
 /// "joint" when every center spans every feature, else each group of features with its number of
 /// centers of each kind.
 pub fn structure(m: &HostModel<'_>) -> String {
@@ -298,6 +299,7 @@ pub fn structure(m: &HostModel<'_>) -> String {
                 KIND_STEP => "steps",
                 KIND_SQUARE => "squares",
                 KIND_CUBE => "cubes",
+                KIND_RAMP => "ramps",
                 _ => "Gaussians",
             };
             format!("{n} {what} over ({})", names.join(", "))

@@ -171,12 +171,13 @@ fn require_masks(path: &Path) -> Result<()> {
         path.display()
     );
     let count = |k: u8| m.rbf.kinds.iter().filter(|x| **x == k).count();
-    use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP};
+    use tcomp_core::rbf::{KIND_CUBE, KIND_GAUSSIAN, KIND_RAMP, KIND_SQUARE, KIND_STEP};
     eprintln!(
-        "{}: additive model, {} Gaussians, {} steps, {} powers, format {}",
+        "{}: additive model, {} Gaussians, {} steps, {} ramps, {} powers, format {}",
         path.display(),
         count(KIND_GAUSSIAN),
         count(KIND_STEP),
+        count(KIND_RAMP),
         count(KIND_SQUARE) + count(KIND_CUBE),
         m.version
     );

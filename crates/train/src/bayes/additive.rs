@@ -17,8 +17,22 @@
 //! Per feature alone: its square and cube about its mean (standardised units); Gaussians at
 //! positions evenly spread over its training range with σ of 1, 2, 4, 8 and 16 times the narrowest
 //! the binned data resolve (half of what one bin spans where the feature moves, see
-//! [`Search::resolution`]); logistic steps `S((z − c)/s)` at the same positions and widths. The
-//! core evaluates all three kinds ([`tcomp_core::rbf`], blob format 4).
+//! [`Search::resolution`]); logistic steps `S((z − c)/s)` at the same positions and widths; and
+//! saturating ramps `clamp((z − c)/s, −1, 1)` at the same positions and half-widths, those with a
+//! corner inside the range (one without is the linear term). The core evaluates every kind
+//! ([`tcomp_core::rbf`]; blob format 4, ramps format 5).
+//!
+//! **Ramps.** A bias that changes slope at one temperature and again at another (a knee, a
+//! saturation: the language's `clamp`) is neither a step nor a bump: a logistic rises with soft
+//! shoulders over its whole width, so a clamped ramp 16 °C wide cost a step plus Gaussians at its
+//! corners, and the Gaussians fade beyond the range. A ramp is that shape in one term, and beyond
+//! its corners it holds its levels as a step does, so it never extrapolates along a slope (a
+//! hinge, `max(0, z − c)`, was tried and did: fitted to a thermometer gradient's linear trend, it
+//! took the trend inside the range and held flat outside, 5× the floor on the verification run).
+//! Measured on `tests/additive_fits.rs`, fit over the least-squares limit, mean of 20 seeds
+//! (`SEED_BASE=5000`, development): knee 1.12 → 1.04, two groups 1.46 → 1.28, supply, lagged
+//! input and step unchanged (1.01, 0.99, 1.00); the real MEMS cycle's acc_x (T) takes one ramp
+//! and its held-out cooling goes 1.053e-2 → 7.49e-3 m/s².
 //!
 //! # The search (sparse Bayesian learning, Tipping and Faul 2003)
 //! The model starts as the bias, the linear term (one α per feature) and the square and cube of
@@ -32,12 +46,12 @@
 //! bins. A term whose α a later refit drives to infinity is removed.
 //!
 //! **Which of M.** Each step adds the best of `M` dictionary entries (up to 24 positions by 5
-//! widths by 2 kinds per feature, and the powers: 49 to 575 in the cases of
-//! `tests/additive_fits.rs`). The hypothesis "one more term" does not say which: under a uniform
-//! prior over the entries its evidence is the increment averaged over all `M`, `ln(Σᵢ e^(ΔLᵢ)/M)`,
-//! not the best one's. So the best term must raise the evidence by the margin plus the
+//! widths by 3 kinds per feature, and the powers: 289 to 1,309 on the path with every kind in the
+//! cases of `tests/additive_fits.rs`). The hypothesis "one more term" does not say which: under
+//! a uniform prior over the entries its evidence is the increment averaged over all `M`,
+//! `ln(Σᵢ e^(ΔLᵢ)/M)`, not the best one's. So the best term must raise the evidence by the margin plus the
 //! difference, `ln M − ln Σᵢ e^(ΔLᵢ − ΔL_max)` ([`choice_charge`], on the closed-form increments of
-//! the scoring step): up to `ln M` (3.9 to 6.4 nats) when one entry stands out alone, as one
+//! the scoring step): up to `ln M` (5.7 to 7.2 nats) when one entry stands out alone, as one
 //! that fits a drift excursion does, and less when many neighbouring entries explain the same
 //! shape, as a real one's do. Why: the largest of a few hundred increments of noise is about
 //! `ln M`, so the margin alone let the search add terms that fit the noise's drift — a sharp
@@ -46,8 +60,9 @@
 //! verification error over the least-squares limit on the exact form, mean: supply 1.07 → 1.01,
 //! lagged input 1.08 → 0.98, knee 1.14 → 1.12, step 1.02 → 1.02, two groups 1.80 → 1.46 (the
 //! plain `ln M`: 1.01, 0.98, 1.14, 1.02, 1.41, but the real MEMS cycle's acc_z lost its step, 0.74
-//! → 0.99 of poly3 on its held-out cooling). The real cycle's acc_x loses its two Gaussians
-//! either way: 0.70 → 1.00 of poly3, its figure before the additive structure. The three paths'
+//! → 0.99 of poly3 on its held-out cooling). The real cycle's acc_x lost its two Gaussians
+//! either way: 0.70 → 1.00 of poly3, its figure before the additive structure (until the ramps,
+//! below: 0.71). The three paths'
 //! ends are compared with the charges ([`Search::occam_within`]); the additive model is compared
 //! with the joint search's pick without them ([`Search::occam`]).
 //!
@@ -68,9 +83,9 @@
 //!
 //! **Three paths.** Greedy forward selection commits to its first choices: a wide step that takes
 //! most of a smooth curve at once can shut out the Gaussians that would follow it better, and
-//! the other way round. So the search runs three times, with the Gaussians, the steps, and both
-//! (each with the powers), in parallel, and the evidence (with its Occam factors) picks among
-//! their ends.
+//! the other way round. So the search runs three times, with the Gaussians, the steps and ramps
+//! (the terms that change level and hold it), and all of them (each with the powers), in
+//! parallel, and the evidence (with its Occam factors) picks among their ends.
 //!
 //! # Serial correlation
 //! Bin means of a residual drift (bias instability, a thermometer's lag): a hold of an hour is 30
@@ -97,7 +112,7 @@
 use super::search::Search;
 use super::{Fitted, to_target_units};
 use crate::ar1::{fit_best_rho, whiten, whitened};
-use crate::rbf64::{KIND_CUBE, KIND_GAUSSIAN, KIND_SQUARE, KIND_STEP, Rbf64};
+use crate::rbf64::{KIND_CUBE, KIND_GAUSSIAN, KIND_RAMP, KIND_SQUARE, KIND_STEP, Rbf64};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
@@ -123,10 +138,10 @@ pub(super) struct Atom {
     pub(super) feats: Vec<usize>,
     /// Center over `feats`, standardised units.
     pub(super) center: Vec<f64>,
-    /// σ of a Gaussian; a step's width `s` (it is `S((z − c)/s)`), a power's scale (it is
-    /// `((z − c)/s)^n`); standardised units.
+    /// σ of a Gaussian; a step's width `s` (it is `S((z − c)/s)`), a ramp's half-width (it is
+    /// `clamp((z − c)/s, −1, 1)`), a power's scale (it is `((z − c)/s)^n`); standardised units.
     pub(super) sigma: f64,
-    /// [`KIND_GAUSSIAN`], [`KIND_STEP`], [`KIND_SQUARE`] or [`KIND_CUBE`].
+    /// [`KIND_GAUSSIAN`], [`KIND_STEP`], [`KIND_RAMP`], [`KIND_SQUARE`] or [`KIND_CUBE`].
     pub(super) kind: u8,
     /// The narrowest `sigma` the refinement may reach ([`Search::refine_atom`]): the data's
     /// resolution for a Gaussian, a 64th of it for a step (a step sharper than the data resolve
@@ -262,19 +277,28 @@ impl Search<'_> {
                     charge: 0.0,
                 });
             }
-            for step in [false, true] {
+            for kind in [KIND_GAUSSIAN, KIND_STEP, KIND_RAMP] {
                 for w in WIDTHS {
                     let sigma = w * narrowest;
                     if sigma > range {
                         break;
                     }
                     for i in 0..positions {
+                        let center = lo + (i as f64 + 0.5) * spacing;
+                        // A ramp with neither corner inside the range is the linear term.
+                        if kind == KIND_RAMP && center - sigma <= lo && center + sigma >= hi {
+                            continue;
+                        }
                         atoms.push(Atom {
                             feats: vec![k],
-                            center: vec![lo + (i as f64 + 0.5) * spacing],
+                            center: vec![center],
                             sigma,
-                            kind: if step { KIND_STEP } else { KIND_GAUSSIAN },
-                            floor: if step { narrowest / 64.0 } else { narrowest },
+                            kind,
+                            floor: if kind == KIND_GAUSSIAN {
+                                narrowest
+                            } else {
+                                narrowest / 64.0
+                            },
                             refined: false,
                             charge: 0.0,
                         });
@@ -300,6 +324,7 @@ impl Search<'_> {
                 let u = u / a.sigma;
                 return match a.kind {
                     KIND_STEP => crate::rbf64::logistic(u),
+                    KIND_RAMP => crate::rbf64::ramp(u),
                     KIND_SQUARE => u * u,
                     _ => u * u * u,
                 };
@@ -471,7 +496,13 @@ impl Search<'_> {
                 let keep: Vec<usize> = (0..dict.len())
                     .filter(|&i| {
                         let k = dict[i].kind;
-                        only.is_none_or(|o| k == o || k == KIND_SQUARE || k == KIND_CUBE)
+                        // Ramps go with the steps: both change level and hold it.
+                        only.is_none_or(|o| {
+                            k == o
+                                || (o == KIND_STEP && k == KIND_RAMP)
+                                || k == KIND_SQUARE
+                                || k == KIND_CUBE
+                        })
                     })
                     .collect();
                 let d: Vec<Atom> = keep.iter().map(|&i| dict[i].clone()).collect();
@@ -626,7 +657,7 @@ impl Search<'_> {
         let Some(k) = atoms[j].feats.first().copied() else {
             return best;
         };
-        if !matches!(atoms[j].kind, KIND_GAUSSIAN | KIND_STEP) {
+        if !matches!(atoms[j].kind, KIND_GAUSSIAN | KIND_STEP | KIND_RAMP) {
             return best;
         }
         let col = self.xmat.column(k);
@@ -771,6 +802,7 @@ impl Search<'_> {
                     .fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
                 let (what, symbol) = match *kind {
                     KIND_STEP => ("steps", "width"),
+                    KIND_RAMP => ("ramps", "half-width"),
                     KIND_SQUARE => return format!("square of ({})", names.join(", ")),
                     KIND_CUBE => return format!("cube of ({})", names.join(", ")),
                     _ => ("Gaussians", "σ"),

@@ -13,7 +13,8 @@ use tcomp_core::{Channel, Model, Status};
 static BLOB: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_model.tcm"));
 /// The same model made additive (each center over one feature; blob format 3).
 static ADDITIVE: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_additive.tcm"));
-/// The same model with every kind of term: steps, Gaussians, a square and a cube (blob format 4).
+/// The same model with every kind of term: steps, ramps, Gaussians, a square and a cube (blob
+/// format 5).
 static KINDS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/smoke_kinds.tcm"));
 /// The host's output of [`KINDS`] at eight points on its range box's diagonal (f32 LE each).
 static KINDS_EXPECTED: &[u8] =
