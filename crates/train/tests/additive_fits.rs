@@ -5,7 +5,8 @@
 //! saturating term in a thermometer gradient). Each case is trained on the training profile and
 //! measured once on the verification profile: the std of 100 s bin means of the residual over the
 //! drawn noise floor, beside the limit that least squares on the exact form reaches (the exact
-//! expressions as linear features, no Gaussians).
+//! expressions as linear features, no Gaussians), and the default fit given those expressions as
+//! its features.
 //!
 //! The added terms are computed here from the recorded columns with the core's own filters in f64,
 //! at 40× the verification run's noise floor, so a model that misses them cannot hide.
@@ -296,11 +297,13 @@ fn cases() -> Vec<Case> {
 }
 
 /// One case at one seed: the default fit, the fit without the additive structure (the joint
-/// model of before), and least squares on the exact form.
+/// model of before), least squares on the exact form, and the default fit given the exact form's
+/// expressions as its features (what a user who knows the physics types).
 struct Row {
     fit: f64,
     joint: f64,
     limit: f64,
+    exact: f64,
 }
 
 /// Every case over `SEEDS` seeds (3 unless the environment says; `SEED_BASE` shifts them: the
@@ -315,7 +318,7 @@ fn table() -> Vec<(&'static str, Vec<Row>)> {
         .and_then(|v| v.parse().ok())
         .unwrap_or(0);
     let mut out = Vec::new();
-    println!("case        seed  fit    joint  LS limit  structure chosen");
+    println!("case        seed  fit    joint  LS limit  exact  structure chosen");
     for mut c in cases() {
         if std::env::var("CASE").is_ok_and(|n| n != c.name) {
             continue;
@@ -328,23 +331,26 @@ fn table() -> Vec<(&'static str, Vec<Row>)> {
             let (fit_ratio, structure) = held_out(&p, &p.features, None, true);
             let (joint, _) = held_out(&p, &p.features, None, false);
             let (limit, _) = held_out(&p, &p.physics, Some(0), false);
+            let (exact, _) = held_out(&p, &p.physics, None, true);
             println!(
-                "{:<11} {:>4}  {fit_ratio:.2}x  {joint:.2}x  {limit:.2}x     {structure}",
+                "{:<11} {:>4}  {fit_ratio:.2}x  {joint:.2}x  {limit:.2}x     {exact:.2}x  {structure}",
                 c.name, c.seed
             );
             rows.push(Row {
                 fit: fit_ratio,
                 joint,
                 limit,
+                exact,
             });
         }
         let mean = |f: fn(&Row) -> f64| rows.iter().map(f).sum::<f64>() / rows.len() as f64;
         println!(
-            "{:<11} mean  {:.2}x  {:.2}x  {:.2}x",
+            "{:<11} mean  {:.2}x  {:.2}x  {:.2}x     {:.2}x",
             c.name,
             mean(|r| r.fit),
             mean(|r| r.joint),
-            mean(|r| r.limit)
+            mean(|r| r.limit),
+            mean(|r| r.exact)
         );
         out.push((c.name, rows));
     }
@@ -403,12 +409,36 @@ fn additive_physics_is_fitted_near_the_least_squares_limit() {
     }
 }
 
+/// A user who knows the physics and types its exact expressions as features gets what least squares
+/// on them reaches: the default fit stays within 1.2× of the limit on every seed. Why it could
+/// fail: the evidence compares the joint model with the additive one, and Gaussians over five
+/// features can follow the noise's drift on the training run. Measured on `SEEDS=20
+/// SEED_BASE=5000` (development), the exact column over the limit, mean and worst: supply 1.01
+/// (1.08), lagged input 0.98 (1.07), knee 0.99 (1.09), step 0.94 (1.14), two groups 1.01
+/// (1.07); before the additive model replaced a joint pick it tied and was simpler than
+/// (`bayes::search`, `choose`): 1.14 (1.55), 1.08 (1.41), 1.07 (1.57), 1.00 (1.40), 1.01 (1.07),
+/// 23 of 100 rows above 1.1× against 1.
+#[test]
+fn the_exact_form_as_features_reaches_its_limit() {
+    for (name, rows) in table() {
+        for r in rows {
+            assert!(
+                r.exact <= 1.2 * r.limit,
+                "{name}: {:.2}x given the exact form, limit {:.2}x",
+                r.exact,
+                r.limit
+            );
+        }
+    }
+}
+
 /// The issue's target, literally: within 1.1× of the floor wherever least squares on the exact
 /// form reaches 1.05×. Not met on the development seeds: 6 of the 7 such rows pass; two groups
 /// 1.17× at 1.04× (the true ramp found, at half-width 0.58 of the gradient's std against the
 /// truth's 0.58). On `SEEDS=20 SEED_BASE=4000` 20 of the 49 such rows pass (19 before the charge
 /// for a term's choice); on `SEED_BASE=9000` 23 of 45 (18 before ramps); on `SEED_BASE=11000`
-/// 33 of 40 (24 before the terms moved off the grid).
+/// 33 of 40 (24 before the terms moved off the grid); on `SEED_BASE=13000` 31 of 42 (30 before a
+/// tied pick of Gaussians gave way to a smaller additive model).
 #[test]
 #[ignore = "issue 25's target not met: two groups 1.17x at 1.04x"]
 fn true_features_reach_the_floor_wherever_least_squares_does() {
