@@ -220,10 +220,8 @@ impl Search<'_> {
         if self.xmat.ncols() == 0 {
             return 0.0;
         }
+        let (lo, hi) = self.range(0);
         let col = self.xmat.column(0);
-        let (lo, hi) = col
-            .iter()
-            .fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
         let step = col
             .iter()
             .zip(col.iter().skip(1))
@@ -271,10 +269,7 @@ impl Search<'_> {
         let d = self.xmat.ncols();
         let mut atoms = Vec::new();
         for k in (0..d).filter(|&k| self.pin(k) != crate::pin::Pin::Linear) {
-            let col = self.xmat.column(k);
-            let (lo, hi) = col
-                .iter()
-                .fold((f64::MAX, f64::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
+            let (lo, hi) = self.range(k);
             let range = hi - lo;
             if range <= 1e-9 {
                 continue;
