@@ -182,7 +182,7 @@ pub(super) struct Additive {
     /// α per column.
     alpha: Vec<f64>,
     /// Linear columns (one per feature with the linear term, else none).
-    pub(super) nl: usize,
+    nl: usize,
     /// The noise's AR(1) coefficient the evidence chose.
     pub(super) rho: f64,
 }

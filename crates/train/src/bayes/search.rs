@@ -460,9 +460,8 @@ impl<'o> Search<'o> {
         }
         compared.push((self.joint_name(&best), units(gauss_top)));
         // The parsimonious pick among linear, cubic and joint Gaussians, as before. The additive
-        // structure replaces it on strong evidence (the Occam margin), or on a tie when it is the
-        // smaller (below), both judged under AR(1) noise whose coefficient the evidence chooses
-        // for each (see [`super::additive`]).
+        // structure replaces it only on strong evidence (the Occam margin), both judged under
+        // AR(1) noise whose coefficient the evidence chooses for each (see [`super::additive`]).
         let pick_ev = additive.as_ref().and_then(|_| {
             let (name, phi, groups) = if let Some(l) = linear_only {
                 (
@@ -484,41 +483,22 @@ impl<'o> Search<'o> {
                     .unwrap_or(&best);
                 (self.joint_name(p), self.design_of(p), self.groups_of(p))
             };
-            // Gaussians in the pick: its size in basis functions, which a tied additive model
-            // must undercut; a linear or cubic pick is no bigger than any additive one.
-            let gaussians = (linear_only.is_none() && !choose_cubic).then_some(phi.ncols());
-            self.evidence_ar1(&phi, &groups)
-                .map(|(e, r)| (name, e, r, gaussians))
+            self.evidence_ar1(&phi, &groups).map(|(e, r)| (name, e, r))
         });
         if let Some(a) = additive.as_ref() {
             compared.push((
                 format!("{}, AR(1) noise ρ {:.2}", self.describe(a), a.rho),
                 units(self.occam(a)),
             ));
-            if let Some((name, e, r, _)) = &pick_ev {
+            if let Some((name, e, r)) = &pick_ev {
                 compared.push((format!("{name}, AR(1) noise ρ {r:.2}"), units(*e)));
             }
         }
+        let pick_ev = pick_ev.map(|(_, e, _)| e);
         compared.sort_by(|a, b| b.1.total_cmp(&a.1));
-        // Parsimony across the two, as within each: the additive model replaces the pick when its
-        // evidence is strongly better, or, where the pick has Gaussians, when it is not strongly
-        // worse and has fewer basis functions (the order the joint search's own parsimony
-        // follows: linear alone, the cubic, then ever more centers). Why: given the exact
-        // physics as features (`tests/additive_fits.rs`, the exact column), a joint model of 4
-        // Gaussians over five features came 3.1 nats below an additive model of 8 basis
-        // functions, short of the margin, so it kept its place as the incumbent, and reached 1.48×
-        // the least-squares limit on the verification run where the additive model reached 1.04×. A
-        // linear or cubic pick keeps a tie: the additive model over the same span differs from it
-        // only in its prior and noise model, and on the real MEMS cycle that cost gyro_y its tie
-        // with least squares (1.581e-3 → 1.705e-3 on the held-out cooling).
-        let replaces = |a: &Additive, (e, gaussians): (f64, Option<usize>)| {
-            let ev = self.occam(a);
-            let size = 1 + a.nl + a.atoms.len();
-            ev > e + margin || (ev >= e - margin && gaussians.is_some_and(|g| size < g))
-        };
-        let pick_ev = pick_ev.map(|(_, e, _, g)| (e, g));
         if let Some(a) = additive
-            && (additive_pinned && Self::has_atoms(&a) || pick_ev.is_some_and(|p| replaces(&a, p)))
+            && (additive_pinned || pick_ev.is_some_and(|p| self.occam(&a) > p + margin))
+            && Self::has_atoms(&a)
         {
             let (rbf, evidence) = self.additive_fit(&a);
             let chosen = self.describe(&a);
