@@ -357,25 +357,35 @@ impl Blocked {
             .map(|l| 1.0 / (beta * l + a_big))
             .collect();
         // Schur complement S = βBᵀB + D − β² C K⁻¹ Cᵀ (row-major p × p) and its right-hand side.
+        // The sums over i run in the outer loop, down each column of C (contiguous), into one
+        // accumulator per entry: the same products added in the same order as an inner loop
+        // over i, so the same bits, without striding across C for every entry.
         let c = &self.c;
+        let cs = c.as_slice();
+        let mut acc = vec![0.0; p * p];
+        let mut acc_r = vec![0.0; p];
+        for i in 0..mm {
+            let (k, bt) = (kinv[i], self.bt[i]);
+            let ci = &cs[i * p..i * p + p];
+            for a in 0..p {
+                let ca = ci[a];
+                let row = &mut acc[a * p..a * p + a + 1];
+                for (r, cb) in row.iter_mut().zip(ci) {
+                    *r += ca * cb * k;
+                }
+                acc_r[a] += ca * k * bt;
+            }
+        }
         let mut s = vec![0.0; p * p];
         let mut rhs = vec![0.0; p];
         for a in 0..p {
             for b in 0..=a {
-                let mut acc = 0.0;
-                for i in 0..mm {
-                    acc += c[(a, i)] * c[(b, i)] * kinv[i];
-                }
-                let v = beta * self.gpp[(a, b)] - b2 * acc;
+                let v = beta * self.gpp[(a, b)] - b2 * acc[a * p + b];
                 s[a * p + b] = v;
                 s[b * p + a] = v;
             }
             s[a * p + a] += al(self.small[a].1);
-            let mut acc = 0.0;
-            for i in 0..mm {
-                acc += c[(a, i)] * kinv[i] * self.bt[i];
-            }
-            rhs[a] = beta * self.bp[a] - b2 * acc;
+            rhs[a] = beta * self.bp[a] - b2 * acc_r[a];
         }
         let (sinv, logdet_s) = spd_inverse(s, p)?;
         let wp: Vec<f64> = (0..p)
@@ -386,18 +396,15 @@ impl Blocked {
         let mut u = vec![0.0; mm];
         let mut ctw = vec![0.0; mm];
         let mut tr_big = 0.0;
-        let mut ci = vec![0.0; p];
         for i in 0..mm {
-            for a in 0..p {
-                ci[a] = c[(a, i)];
-            }
+            let ci = &cs[i * p..i * p + p];
             let cw: f64 = ci.iter().zip(&wp).map(|(x, w)| x * w).sum();
             ctw[i] = cw;
             u[i] = kinv[i] * beta * (self.bt[i] - cw);
             let mut q = 0.0;
             for a in 0..p {
                 let row = &sinv[a * p..a * p + p];
-                q += ci[a] * row.iter().zip(&ci).map(|(x, y)| x * y).sum::<f64>();
+                q += ci[a] * row.iter().zip(ci).map(|(x, y)| x * y).sum::<f64>();
             }
             tr_big += kinv[i] + b2 * kinv[i] * kinv[i] * q;
         }
