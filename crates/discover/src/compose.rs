@@ -100,7 +100,8 @@ use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
+use std::sync::Mutex;
 use tcomp_core::expr::{BinOp, Expr};
 use tcomp_core::lang::{self, Domain, Function, Operands};
 use tcomp_train::Dataset;
@@ -427,6 +428,10 @@ struct Screen<'a> {
     /// Posterior covariance of the base weights.
     cov: DMatrix<f64>,
     beta: f64,
+    /// The coarse screen's gain of every expression scored so far, by its text: parameters are
+    /// rounded to the figures they print with, so a grid point, a refinement's probe and another
+    /// shape's inner start often spell the same expression (the same column, the same gain).
+    coarse_seen: Mutex<HashMap<String, f64>>,
 }
 
 impl<'a> Screen<'a> {
@@ -448,6 +453,7 @@ impl<'a> Screen<'a> {
             r,
             cov,
             beta,
+            coarse_seen: Mutex::new(HashMap::new()),
         })
     }
 
@@ -464,9 +470,28 @@ impl<'a> Screen<'a> {
 
     /// The gain of `e` computed on the bins' mean rows: a coarse grid's screen.
     fn gain_coarse(&self, e: &Expr) -> f64 {
+        let text = e.to_string();
+        if let Some(&g) = self
+            .coarse_seen
+            .lock()
+            .ok()
+            .and_then(|m| m.get(&text).copied())
+            .as_ref()
+        {
+            return g;
+        }
+        let g = self.gain_coarse_of(text.clone());
+        if let Ok(mut m) = self.coarse_seen.lock() {
+            m.insert(text, g);
+        }
+        g
+    }
+
+    /// [`Screen::gain_coarse`] computed.
+    fn gain_coarse_of(&self, text: String) -> f64 {
         let spec = FeatureSpec {
             signals: self.p.signals().to_vec(),
-            features: vec![e.to_string()],
+            features: vec![text],
         };
         let Ok(program) = spec.program() else {
             return f64::NEG_INFINITY;
