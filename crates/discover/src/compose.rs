@@ -471,13 +471,12 @@ impl<'a> Screen<'a> {
     /// The gain of `e` computed on the bins' mean rows: a coarse grid's screen.
     fn gain_coarse(&self, e: &Expr) -> f64 {
         let text = e.to_string();
-        if let Some(&g) = self
+        let seen = self
             .coarse_seen
             .lock()
             .ok()
-            .and_then(|m| m.get(&text).copied())
-            .as_ref()
-        {
+            .and_then(|m| m.get(&text).copied());
+        if let Some(g) = seen {
             return g;
         }
         let g = self.gain_coarse_of(text.clone());
