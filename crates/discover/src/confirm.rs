@@ -718,8 +718,13 @@ pub(crate) fn refit_placebos(
                 .map_or(f64::NEG_INFINITY, |f| 100.0 * (1.0 - f.pooled / before))
         })
         .collect();
+    let threshold_pct = placebos_pct
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
     Some(crate::placebo::RefitPlacebos {
         improvement_pct: k.improvement_pct,
         placebos_pct,
+        threshold_pct,
     })
 }

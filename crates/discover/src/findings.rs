@@ -87,11 +87,45 @@ pub struct RefitPlacebos {
     pub improvement_pct: f64,
     /// The same for each placebo.
     pub placebos_pct: Vec<f64>,
+    /// The acceptance threshold: the largest placebo improvement over every candidate retested in
+    /// this stage (the max-statistic, as the first stage's threshold), so that the stage holds its
+    /// rate however many candidates it retests.
+    pub threshold_pct: f64,
 }
 
 impl RefitPlacebos {
-    /// Whether the candidate's improvement beats every placebo's.
+    /// Whether the candidate's improvement beats every placebo of every candidate retested.
     pub fn passes(&self) -> bool {
-        !self.placebos_pct.is_empty() && self.placebos_pct.iter().all(|p| self.improvement_pct > *p)
+        !self.placebos_pct.is_empty()
+            && self.improvement_pct > self.threshold_pct
+            && self.placebos_pct.iter().all(|p| self.improvement_pct > *p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A retested candidate that beats its own refitted placebos but not another retested
+    /// candidate's fails the second stage: the threshold is shared.
+    #[test]
+    fn the_second_stage_threshold_is_shared() {
+        let own = RefitPlacebos {
+            improvement_pct: 21.0,
+            placebos_pct: vec![3.0, 15.0, -2.0],
+            threshold_pct: 15.0,
+        };
+        assert!(own.passes());
+        let shared = RefitPlacebos {
+            threshold_pct: 24.0,
+            ..own.clone()
+        };
+        assert!(!shared.passes());
+        let none = RefitPlacebos {
+            placebos_pct: Vec::new(),
+            threshold_pct: f64::NEG_INFINITY,
+            ..own
+        };
+        assert!(!none.passes());
     }
 }

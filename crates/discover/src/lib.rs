@@ -289,12 +289,31 @@ pub fn diagnose(
         .take(2)
         .collect();
     if !retest.is_empty() {
-        for i in retest {
+        for &i in &retest {
             let Some(c) = cands.get(i) else { continue };
             let refit =
                 confirm::refit_placebos(&info, &roles, runs, &opts.confirm, prepared.gap_s, c);
             if let Some(p) = cands.get_mut(i).and_then(|c| c.placebo.as_mut()) {
                 p.refit = refit;
+            }
+        }
+        // One threshold for every candidate retested, as in the first stage: the largest placebo
+        // of any of them (a candidate is one of several chances to pass).
+        fn refit_of(c: &score::Scored) -> Option<&placebo::RefitPlacebos> {
+            c.placebo.as_ref().and_then(|p| p.refit.as_ref())
+        }
+        let threshold = retest
+            .iter()
+            .filter_map(|&i| cands.get(i).and_then(refit_of))
+            .map(|r| r.threshold_pct)
+            .fold(f64::NEG_INFINITY, f64::max);
+        for &i in &retest {
+            if let Some(r) = cands
+                .get_mut(i)
+                .and_then(|c| c.placebo.as_mut())
+                .and_then(|p| p.refit.as_mut())
+            {
+                r.threshold_pct = threshold;
             }
         }
         opts.criterion.apply(refit_before.noise_floor, &mut cands);

@@ -36,6 +36,9 @@
 //!   training run's blocks, compared on the held-out improvement its confirmation measured. The
 //!   scoring design's fixed Gaussians leave some effects nothing to gain in-sample (T·dT/dt on a
 //!   run with one ramp rate), and those are judged on held-out data, so their placebos are too.
+//!   Its threshold is the largest refitted placebo of every candidate it retests (up to two), the
+//!   max-statistic again: with a threshold per candidate, two retested candidates were two
+//!   chances to pass, and the stage's rate doubled.
 //!   Passing either stage passes the leg: two 2.5 % tests, a false-alarm rate of at most 5 % by
 //!   construction (Bonferroni; with 19 placebos a stage it was 10 %), measured on the negative
 //!   controls (`tests/false_discoveries.rs`, BENCHMARKS.md).

@@ -21,8 +21,8 @@
 //!    of every candidate tested — the same columns shifted in time, searched over the family's
 //!    parameter as the candidate was ([`crate::placebo`]) — so a slow drift that any slow column
 //!    would explain is not named, at a false-alarm rate of 1 / (placebos + 1) = 2.5 %; or, for a
-//!    candidate with no searched parameter, its held-out improvement beats its placebos' refits
-//!    (a second stage at the same rate): at most 5 % over both.
+//!    candidate with no searched parameter, its held-out improvement beats the refitted placebos
+//!    of every candidate so retested (a second stage at the same rate): at most 5 % over both.
 //!
 //! "Cannot tell" is said, naming the candidates and the kind of run that would separate them
 //! ([`separating_run`]), when two candidates clear every leg and their refits' log evidence differs

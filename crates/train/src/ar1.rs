@@ -20,8 +20,13 @@ use crate::evidence::{GroupFit, Settings, fit_with};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
-/// The AR(1) coefficients of the noise compared by the evidence (bins in time order).
-pub const RHO_GRID: [f64; 8] = [0.0, 0.3, 0.5, 0.65, 0.8, 0.9, 0.95, 0.98];
+/// The AR(1) coefficients of the noise compared by the evidence (bins in time order). In 100 s
+/// bins a Gauss–Markov drift of correlation time τ has `ρ = e^(−100 s/τ)`: 0.98 is τ ≈ 83 min,
+/// 0.99 ≈ 2.8 h, 0.995 ≈ 5.5 h — the hours of a gyro's or accelerometer's bias instability. A grid
+/// that stopped at 0.98 held such a drift to 83 min, left its slow power unmodelled, and credited a
+/// slow column with explaining it: on a 3-hour drift the evidence sat at the grid's edge and a
+/// curvature in T passed the placebo test that a ρ of 0.995 rejects.
+pub const RHO_GRID: [f64; 10] = [0.0, 0.3, 0.5, 0.65, 0.8, 0.9, 0.95, 0.98, 0.99, 0.995];
 
 /// Prais–Winsten whitening of a series under AR(1) coefficient `rho`, in place:
 /// `v'ₜ = vₜ − ρ·vₜ₋₁`, the first of each stretch scaled by `√(1 − ρ²)`. `starts`: the indices

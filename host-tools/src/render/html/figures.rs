@@ -351,19 +351,12 @@ pub(super) fn placebo_plots(a: &Analysis) -> Vec<String> {
         .filter_map(|c| {
             let pl = c.placebo.as_ref()?;
             let (values, own, threshold, label) = match &pl.refit {
-                Some(r) => {
-                    let max = r
-                        .placebos_pct
-                        .iter()
-                        .copied()
-                        .fold(f64::NEG_INFINITY, f64::max);
-                    (
-                        r.placebos_pct.clone(),
-                        r.improvement_pct,
-                        max,
-                        "held-out improvement of the trainer's refit (%)",
-                    )
-                }
+                Some(r) => (
+                    r.placebos_pct.clone(),
+                    r.improvement_pct,
+                    r.threshold_pct,
+                    "held-out improvement of the trainer's refit (%)",
+                ),
                 None => (
                     pl.placebos.clone(),
                     pl.statistic,
