@@ -9,6 +9,7 @@ use crate::column_cache::ColumnCache;
 use crate::design::{Columns, Transform, compute_binned, error_of, floor_estimate, hcat, mean_sd};
 use crate::error::{DiscoverError, Result};
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use serde::Serialize;
 use tcomp_train::bayes::{self, BayesOptions};
 use tcomp_train::binning::{bin_mean, bins};
@@ -432,16 +433,48 @@ impl Prepared {
 
     /// The binned training columns of `exprs`, as they are (not standardised).
     pub(crate) fn binned(&self, exprs: &[String]) -> Result<Columns> {
-        self.train_cols.columns(exprs, |missing| {
+        let compute = |e: &[String]| {
             compute_binned(
                 &self.signals,
-                missing,
+                e,
                 &self.data,
                 &self.time,
                 &self.starts,
                 &self.tbins,
             )
-        })
+        };
+        if self.train_cols.keeps() {
+            self.train_cols
+                .columns(exprs, |missing| together(missing, &compute))
+        } else {
+            self.train_cols.columns(exprs, compute)
+        }
+    }
+
+    /// Computes and keeps the training columns of `exprs` — with `verification`, the verification
+    /// run's too, as [`Prepared::standardised`] reads them — ahead of the calls that use them one
+    /// candidate at a time: [`together`], on a run without gaps (with gaps nothing is kept, and
+    /// this does nothing). An expression that fails here is left to the call that uses it, which
+    /// reports it.
+    pub(crate) fn prefetch(&self, exprs: &[String], verification: bool) {
+        if !self.train_cols.keeps() {
+            return;
+        }
+        let mut unique: Vec<String> = Vec::with_capacity(exprs.len());
+        for e in exprs {
+            if !unique.contains(e) {
+                unique.push(e.clone());
+            }
+        }
+        unique
+            .par_chunks(tcomp_train::features::F)
+            .for_each(|chunk| {
+                if verification {
+                    let _ = self.standardised(chunk);
+                } else {
+                    let _ = self.binned(chunk);
+                }
+            });
     }
 
     /// Standardised training columns only (what a search over many members scores with).
@@ -480,13 +513,52 @@ impl Prepared {
         let v = match &self.heldout {
             HeldOut::Verify {
                 data, bins, starts, ..
-            } => Some(z(self.verify_cols.columns(exprs, |missing| {
-                compute_binned(&self.signals, missing, data, &self.time, starts, bins)
-            })?)),
+            } => {
+                let compute =
+                    |e: &[String]| compute_binned(&self.signals, e, data, &self.time, starts, bins);
+                let cols = if self.verify_cols.keeps() {
+                    self.verify_cols
+                        .columns(exprs, |missing| together(missing, &compute))?
+                } else {
+                    self.verify_cols.columns(exprs, compute)?
+                };
+                Some(z(cols))
+            }
             HeldOut::Blocks(_) => None,
         };
         Ok((z(cols), v))
     }
+}
+
+/// The columns of `exprs` on a run without gaps, where a column does not depend on what it is
+/// computed beside ([`ColumnCache`]): [`tcomp_train::features::F`] to a program, the programs
+/// run in parallel, so that the model's signals and the inputs' reading are paid once per
+/// program, not once per column (a lag bank's ten time constants, a family's members). A
+/// program that cannot hold its share (too many nodes) is run one expression at a time.
+fn together(
+    exprs: &[String],
+    compute: &(dyn Fn(&[String]) -> Result<Columns> + Sync),
+) -> Result<Columns> {
+    let parts: Vec<Result<Columns>> = exprs
+        .par_chunks(tcomp_train::features::F)
+        .map(|chunk| {
+            compute(chunk).or_else(|e| {
+                if chunk.len() == 1 {
+                    return Err(e);
+                }
+                let mut out = Vec::with_capacity(chunk.len());
+                for x in chunk {
+                    out.extend(compute(std::slice::from_ref(x))?);
+                }
+                Ok(out)
+            })
+        })
+        .collect();
+    let mut out = Vec::with_capacity(exprs.len());
+    for p in parts {
+        out.extend(p?);
+    }
+    Ok(out)
 }
 
 /// Binned values of `expr` on the training data (for plots of residual against a candidate).

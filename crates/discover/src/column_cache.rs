@@ -9,7 +9,9 @@
 //! the column a new call would compute. Across a gap it does not: the program restarts its
 //! filters or carries them over by its longest time constant ([`tcomp_core::stream::gap_resets`]),
 //! a property of the whole program, so `rate(T)` beside `lag(T, 3000)` is not `rate(T)` alone.
-//! So columns are kept only for a run without gaps ([`ColumnCache::for_run`]).
+//! So columns are kept only for a run without gaps ([`ColumnCache::for_run`]), and only there are
+//! several computed by one program ([`ColumnCache::keeps`]): the model's signals and the reading of
+//! the inputs, which every program repeats, are then paid once for up to eight columns.
 
 use crate::error::Result;
 use std::collections::HashMap;
@@ -24,6 +26,12 @@ impl ColumnCache {
     /// keeps columns only when there is no gap.
     pub(crate) fn for_run(starts: &[usize]) -> Self {
         Self(starts.iter().all(|&s| s == 0).then(Mutex::default))
+    }
+
+    /// Whether columns are kept (a run without gaps): a column is then the same whatever it is
+    /// computed beside, so the missing ones may be computed together.
+    pub(crate) fn keeps(&self) -> bool {
+        self.0.is_some()
     }
 
     /// The columns of `exprs` in order: those kept, and the rest from `compute` (called once,

@@ -121,6 +121,14 @@ impl<'a> Lags<'a> {
     /// fails). `x` itself is always in: a residual that follows the input without delay (or the
     /// model's own misfit of it, when the model has it) is not read as a lag.
     fn fit(&mut self, taus: &[f64]) -> Option<evidence::GroupFit> {
+        let missing: Vec<String> = taus
+            .iter()
+            .filter(|t| !self.done.contains_key(&t.to_bits()))
+            .map(|&t| expr::lag(expr::name(self.x), t).to_string())
+            .collect();
+        if missing.len() > 1 {
+            self.p.prefetch(&missing, false);
+        }
         let mut cols = vec![self.raw.clone()?];
         for &t in taus {
             cols.push(self.column(t)?);

@@ -165,6 +165,22 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
     };
 
     let n = p.y.len();
+    // Every column the sets below read, computed together first (they are read one at a time).
+    let mut wanted: Vec<String> = Vec::new();
+    for c in cands.iter().filter(|c| c.confirmation.is_some()) {
+        wanted.extend(c.expressions.iter().cloned());
+        if let Some(search) = &c.search {
+            for v in family_grid(search.lo, search.hi) {
+                wanted.extend(search.template.member(v).expressions);
+            }
+        }
+        match &c.searched {
+            Searched::No => {}
+            Searched::Bank(bank) => wanted.extend(bank.iter().cloned()),
+            Searched::Alternatives { members: alts, .. } => wanted.extend(alts.iter().cloned()),
+        }
+    }
+    p.prefetch(&wanted, false);
     // Each tested candidate's column sets: at its parameter first, then across its family's range.
     let tested: Vec<Tested> = cands
         .iter()

@@ -170,6 +170,11 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
         .enumerate()
         .flat_map(|(f, fam)| fam.members.iter().map(move |m| (f, m)))
         .collect();
+    let exprs: Vec<String> = members
+        .iter()
+        .flat_map(|(_, m)| m.expressions.iter().cloned())
+        .collect();
+    p.prefetch(&exprs, true);
     let results: Vec<(usize, &Candidate, std::result::Result<MemberScore, String>)> = members
         .par_iter()
         .map(|&(f, m)| (f, m, score_member(p, m)))
