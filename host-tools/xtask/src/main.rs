@@ -4,8 +4,8 @@
 //!   the no_std build of the core, the STM32F407 board binary with its size budgets (`board.rs`),
 //!   the QEMU smoke run with its instruction budget, and the QEMU product run (`qemu.rs`).
 //! * `cargo xtask lint` — only fmt and clippy (the first steps of `ci`).
-//! * `cargo xtask prepare` — `lint`, then the host test build (what `.ci/run` runs while it
-//!   installs Debian's packages).
+//! * `cargo xtask prepare` — `lint`, the host crates' clippy done inside the host test build
+//!   (what `.ci/run` runs while it installs Debian's packages).
 //! * `cargo xtask board` — only the board binary's build and sizes.
 //! * `cargo xtask targets` — the no_std build of the core and the HAL, then `board` (the target
 //!   builds of `ci`, which runs them beside the host tests).
@@ -77,6 +77,52 @@ fn cargo(args: &[&str]) -> Result<()> {
     )
 }
 
+/// A cargo command over the host workspace whose crates are compiled by `clippy-driver` with
+/// `-D warnings`: the host lint happens inside the test build, as `cargo clippy` runs it (the same
+/// driver and arguments, set the way `cargo clippy` sets them), but with code generated.
+///
+/// Why: `cargo clippy` is a check build, which shares no artifact with the test build, so the
+/// dependencies were compiled twice, once as metadata for the lint and once as code for the tests
+/// (clippy 343 s before a 393 s test build on the slower 2-core machine). Here they are compiled
+/// once, and only the workspace's own crates pay for the lints. The driver is the toolchain's own
+/// (beside its `cargo`), so its crates link with the dependencies rustc built. Cargo hashes the
+/// wrapper into the workspace crates' metadata, so a plain `cargo test` keeps its own artifacts
+/// and neither build invalidates the other. The driver turns MIR optimisations off (its lints read
+/// the unoptimised MIR); LLVM's optimisation and the floating-point results are unchanged, and the
+/// binaries a user flashes or installs are never built this way: the target builds and release
+/// builds use plain rustc.
+fn host_cargo(args: &[&str]) -> Result<Command> {
+    let driver = std::path::Path::new(env!("CARGO")).with_file_name("clippy-driver");
+    if !driver.is_file() {
+        bail!(
+            "no clippy-driver beside cargo ({}): `rustup component add clippy`",
+            driver.display()
+        );
+    }
+    eprintln!(
+        "$ cargo {} (the workspace compiled by clippy-driver, -D warnings)",
+        args.join(" ")
+    );
+    let mut cmd = Command::new(env!("CARGO"));
+    cmd.args(args)
+        .env("RUSTC_WORKSPACE_WRAPPER", driver)
+        .env("CLIPPY_ARGS", CLIPPY_ARGS);
+    Ok(cmd)
+}
+
+/// `-D warnings` as `cargo clippy -- -D warnings` hands it to `clippy-driver`: each argument
+/// followed by the separator the driver splits on.
+const CLIPPY_ARGS: &str = "-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__";
+
+/// Runs [`host_cargo`]'s command, bounded by [`CARGO_LIMIT`].
+fn host_cargo_run(args: &[&str]) -> Result<()> {
+    proc::run(
+        &mut host_cargo(args)?,
+        &format!("`cargo {}`", args.join(" ")),
+        CARGO_LIMIT,
+    )
+}
+
 /// The wall time of each step of `cargo xtask ci`, printed as it goes and summed up at the end
 /// (`CI-TIMING`), so a slow CI run says where its time went.
 struct Steps(Vec<(&'static str, Duration)>);
@@ -107,7 +153,7 @@ impl Drop for Steps {
 /// `cargo xtask lint`: the first steps of `ci` on their own (`.ci/run` runs them while it
 /// installs Debian's packages).
 fn lint() -> Result<()> {
-    lint_steps(&mut Steps(Vec::new()))
+    lint_steps(&mut Steps(Vec::new()), HostLint::Check)
 }
 
 /// `cargo xtask prepare`: the first steps of `ci` that need no Debian package — the lint and the
@@ -115,17 +161,24 @@ fn lint() -> Result<()> {
 /// then finds them done (its fmt, clippy and test build re-check in seconds): on a fresh clone
 /// the setup took 574 s with the build in it, against 324 s + a 296 s test build after it.
 fn prepare() -> Result<()> {
-    let mut steps = Steps(Vec::new());
-    lint_steps(&mut steps)?;
-    steps.run("test_build", host_build)
+    lint_steps(&mut Steps(Vec::new()), HostLint::InTestBuild)
+}
+
+/// How [`lint_steps`] lints the host crates.
+enum HostLint {
+    /// `cargo clippy --all-targets`, a check build (`cargo xtask lint`: no code generated).
+    Check,
+    /// Inside the host test build ([`host_build`], through [`host_cargo`]): `prepare` and `ci`,
+    /// which need that build anyway.
+    InTestBuild,
 }
 
 /// Formatting and clippy, host and target. The target's clippy (the firmware crates and the STM32
 /// board's binary for thumbv7em, the STM32F4 PAC among them; then the QEMU board's, a workspace
 /// of its own) shares no artifact with the host's
 /// but a few proc-macros, so it runs beside it, in its own target directory (cargo's lock on one
-/// directory would serialise the two): the host check leaves a core idle much of the time.
-fn lint_steps(steps: &mut Steps) -> Result<()> {
+/// directory would serialise the two): the host build leaves a core idle much of the time.
+fn lint_steps(steps: &mut Steps, host: HostLint) -> Result<()> {
     let qemu_board = qemu::board_args();
     let qemu_board: Vec<&str> = qemu_board.iter().map(String::as_str).collect();
     steps.run("fmt", || {
@@ -155,16 +208,19 @@ fn lint_steps(steps: &mut Steps) -> Result<()> {
     // Everything that runs on the target, both boards' binaries with it.
     let target = Lane::start("clippy_target", clippy_target)?;
     // The host crates, the firmware's application library with them (its tests run on the host).
-    steps.run("clippy_host", || {
-        cargo(
-            &[
-                &["clippy"][..],
-                &HOST_TESTS,
-                &["--all-targets", "--", "-D", "warnings"],
-            ]
-            .concat(),
-        )
-    })?;
+    match host {
+        HostLint::Check => steps.run("clippy_host", || {
+            cargo(
+                &[
+                    &["clippy"][..],
+                    &HOST_TESTS,
+                    &["--all-targets", "--", "-D", "warnings"],
+                ]
+                .concat(),
+            )
+        })?,
+        HostLint::InTestBuild => steps.run("test_build_and_clippy_host", host_build)?,
+    }
     steps.run("clippy_target", || target.finish())?;
     // The QEMU board, a workspace of its own, after the lane (its dependencies' checks are the
     // lane's, in the same target directory).
@@ -192,15 +248,17 @@ fn lint_steps(steps: &mut Steps) -> Result<()> {
 
 fn ci() -> Result<()> {
     let mut steps = Steps(Vec::new());
-    lint_steps(&mut steps)?;
-    // The test build, then the tests beside the target builds: the tests keep about 1.6 of the
-    // two cores busy, and the release builds for thumbv7em (their own profile and target, so
-    // cargo's lock does not serialise them with the tests) take most of the rest.
-    steps.run("test_build", host_build)?;
+    // The lint with the test build in it, then the tests beside the target builds: the tests
+    // keep about 1.6 of the two cores busy, and the release builds for thumbv7em (their own
+    // profile and target, so cargo's lock does not serialise them with the tests) take most of
+    // the rest.
+    lint_steps(&mut steps, HostLint::InTestBuild)?;
     let mut targets = Command::new(std::env::current_exe()?);
     targets.arg("targets");
     let targets = Lane::start("targets", targets)?;
-    steps.run("test", || cargo(&[&["test"][..], &HOST_TESTS].concat()))?;
+    steps.run("test", || {
+        host_cargo_run(&[&["test"][..], &HOST_TESTS].concat())
+    })?;
     steps.run("targets", || targets.finish())?;
     // The Python step (a wheel built by maturin with its own feature set, packages from PyPI,
     // pytest) shares nothing with the steps below but the test build's `tcomp` binary, and the
@@ -286,8 +344,11 @@ impl Lane {
 /// binary and `libtcomp_ffi.a` that the C and Python steps use. Built with the test step's own
 /// package set, so its features are the same and nothing is compiled a second time (a `cargo
 /// build -p …` of a subset unifies features differently and rebuilds the dependency tree).
+///
+/// It is also the host lint ([`host_cargo`]): `--all-targets` builds the benches too, so every
+/// target `cargo clippy --all-targets` would check is compiled through the driver.
 pub fn host_build() -> Result<()> {
-    cargo(&[&["test", "--no-run"][..], &HOST_TESTS].concat())
+    host_cargo_run(&[&["test", "--no-run", "--all-targets"][..], &HOST_TESTS].concat())
 }
 
 /// The host build's artifacts ([`host_build`]'s command, which builds nothing when the test step
@@ -304,12 +365,7 @@ fn host_artifacts() -> Result<Vec<serde_json::Value>> {
         &HOST_TESTS,
     ]
     .concat();
-    eprintln!("$ cargo {}", args.join(" "));
-    let out = proc::output(
-        Command::new(env!("CARGO")).args(&args),
-        "the host test build",
-        CARGO_LIMIT,
-    )?;
+    let out = proc::output(&mut host_cargo(&args)?, "the host test build", CARGO_LIMIT)?;
     if !out.status.success() {
         bail!("the host test build failed ({})", out.status);
     }
@@ -426,4 +482,38 @@ fn power_cut() -> Result<()> {
         bail!("signed power-loss test failed: {signed}");
     }
     Ok(())
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// The host build's cargo runs the toolchain's own clippy-driver on the workspace with the
+    /// arguments `cargo clippy -- -D warnings` would give it, and nothing else of cargo's
+    /// environment changes (the target builds and the release binaries stay plain rustc builds).
+    #[test]
+    fn the_host_build_lints_with_the_toolchains_clippy_driver() {
+        let cmd = host_cargo(&["test", "--no-run"]).unwrap();
+        let envs: std::collections::BTreeMap<String, String> = cmd
+            .get_envs()
+            .map(|(k, v)| {
+                let v = v.map(|v| v.to_string_lossy().into_owned());
+                (k.to_string_lossy().into_owned(), v.unwrap_or_default())
+            })
+            .collect();
+        let keys: Vec<&str> = envs.keys().map(String::as_str).collect();
+        assert_eq!(keys, ["CLIPPY_ARGS", "RUSTC_WORKSPACE_WRAPPER"]);
+        let driver = std::path::Path::new(&envs["RUSTC_WORKSPACE_WRAPPER"]);
+        assert!(driver.is_file(), "{}", driver.display());
+        assert_eq!(
+            driver.parent(),
+            std::path::Path::new(env!("CARGO")).parent()
+        );
+        let args: Vec<&str> = envs["CLIPPY_ARGS"]
+            .split("__CLIPPY_HACKERY__")
+            .filter(|a| !a.is_empty())
+            .collect();
+        assert_eq!(args, ["-D", "warnings"]);
+    }
 }
