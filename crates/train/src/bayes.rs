@@ -235,31 +235,29 @@ pub fn fit_binned(
     opts: &BayesOptions,
 ) -> Option<BayesFit> {
     let search = Search::new(x, y, sub, opts);
-    let mut evaluated = 0;
+    // The cubic in the first feature, when offered: one candidate of its own basis.
+    let cubic = cubic.and_then(|p| cubic_candidate(&search.xmat, p, &search.yn));
+    // A pinned cubic is compared with nothing, and its weights do not depend on the Gaussians:
+    // their search (some forty evidence fits before a coordinate search) is not run. Without a
+    // cubic to take (a constant first feature) the pin falls back on the Gaussians' search.
+    if let (Some(Basis::Cubic), Some(c)) = (opts.basis, cubic.as_ref()) {
+        return Some(search.pinned_cubic(c));
+    }
+    let mut evaluated = usize::from(cubic.is_some());
     let grid = search.grid();
     let mut best = search.first_scan(&grid, &mut evaluated)?;
     let margin = search.margin(&best);
-    // The cubic in the first feature, when offered: one candidate of its own basis.
-    let cubic = cubic.and_then(|p| cubic_candidate(&search.xmat, p, &search.yn));
-    evaluated += usize::from(cubic.is_some());
-    let pinned = opts.basis == Some(Basis::Cubic) && cubic.is_some();
-    if !pinned {
-        if best.m > 0 {
-            best = search.refine(best, margin, &mut evaluated)?;
-        }
-        best = search.other_centers(&grid, best, &mut evaluated)?;
+    if best.m > 0 {
+        best = search.refine(best, margin, &mut evaluated)?;
     }
+    best = search.other_centers(&grid, best, &mut evaluated)?;
     let additive_pinned = opts.basis == Some(Basis::Additive);
     let additive = if opts.additive && (opts.basis.is_none() || additive_pinned) {
         search.additive(&mut evaluated)
     } else {
         None
     };
-    let pinned = if pinned {
-        Some(Basis::Cubic)
-    } else {
-        opts.basis.filter(|_| additive_pinned)
-    };
+    let pinned = opts.basis.filter(|_| additive_pinned);
     search.choose(best, cubic, additive, margin, evaluated, pinned)
 }
 
@@ -342,7 +340,7 @@ impl CubicCandidate {
         ys: f64,
         n: usize,
         evaluated: usize,
-        gauss_log_evidence: f64,
+        gauss_log_evidence: Option<f64>,
     ) -> BayesFit {
         let d = xm.len();
         let (b0, lin, _) = split_weights(&self.fit.w, d + 2);
@@ -368,7 +366,7 @@ impl CubicCandidate {
             length_scales: Vec::new(),
             evaluated,
             basis: Basis::Cubic,
-            other_basis_log_evidence: Some(gauss_log_evidence - n as f64 * ys.ln()),
+            other_basis_log_evidence: gauss_log_evidence.map(|e| e - n as f64 * ys.ln()),
             structure: StructureReport::default(),
         }
     }

@@ -524,7 +524,7 @@ impl<'o> Search<'o> {
         }
         if let (true, Some(c)) = (choose_cubic && linear_only.is_none(), cubic.as_ref()) {
             let (xm, unit, ym, ys) = (&self.xm, &self.unit, self.ym, self.ys);
-            let mut f = c.finish(xm, unit, ym, ys, n, evaluated, gauss_top);
+            let mut f = c.finish(xm, unit, ym, ys, n, evaluated, Some(gauss_top));
             f.structure = StructureReport {
                 chosen: "cubic in the first feature".into(),
                 compared,
@@ -543,6 +543,20 @@ impl<'o> Search<'o> {
         let mut f = self.gaussian_fit(best, evaluated, other);
         f.structure = StructureReport { chosen, compared };
         Some(f)
+    }
+
+    /// The cubic in the first feature as the basis pinned: the one fit made, the one structure
+    /// compared.
+    pub(super) fn pinned_cubic(&self, c: &CubicCandidate) -> BayesFit {
+        let n = self.n();
+        let mut f = c.finish(&self.xm, &self.unit, self.ym, self.ys, n, 1, None);
+        let name = "cubic in the first feature".to_string();
+        let log_evidence = c.fit.ev.log_evidence - n as f64 * self.ys.ln();
+        f.structure = StructureReport {
+            chosen: name.clone(),
+            compared: vec![(name, log_evidence)],
+        };
+        f
     }
 
     /// A joint model in words.
