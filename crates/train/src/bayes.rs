@@ -257,8 +257,7 @@ pub fn fit_binned(
     } else {
         None
     };
-    let pinned = opts.basis.filter(|_| additive_pinned);
-    search.choose(best, cubic, additive, margin, evaluated, pinned)
+    search.choose(best, cubic, additive, margin, evaluated, additive_pinned)
 }
 
 /// The bins where a stretch of the record begins after a gap: those whose first row is at or

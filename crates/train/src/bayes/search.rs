@@ -418,8 +418,9 @@ impl<'o> Search<'o> {
     }
 
     /// Parsimony: the simplest model whose evidence is not strongly worse than the best's, in the
-    /// order linear alone (0 centers), the cubic, then ever more centers. `pinned`: the cubic
-    /// (when offered) or the additive structure (when its search found a term) is taken as is.
+    /// order linear alone (0 centers), the cubic, then ever more centers. `additive_pinned`: the
+    /// additive structure (when its search found a term) is taken as is. (A pinned cubic never
+    /// gets here: [`super::fit_binned`] takes it without a search.)
     pub(super) fn choose(
         &self,
         mut best: Candidate,
@@ -427,10 +428,8 @@ impl<'o> Search<'o> {
         additive: Option<Additive>,
         margin: f64,
         evaluated: usize,
-        pinned: Option<Basis>,
+        additive_pinned: bool,
     ) -> Option<BayesFit> {
-        let cubic_pinned = pinned == Some(Basis::Cubic);
-        let additive_pinned = pinned == Some(Basis::Additive);
         let n = self.n();
         let per: Vec<Candidate> = self
             .best_per_m
@@ -442,12 +441,9 @@ impl<'o> Search<'o> {
             .as_ref()
             .map_or(ev(&best.fit), |c| ev(&best.fit).max(ev(&c.fit)));
         let gauss_top = ev(&best.fit);
-        let linear_only = per
-            .iter()
-            .find(|c| c.m == 0 && ev(&c.fit) >= top - margin)
-            .filter(|_| !cubic_pinned);
-        let choose_cubic = cubic_pinned
-            || linear_only.is_none() && cubic.as_ref().is_some_and(|c| ev(&c.fit) >= top - margin);
+        let linear_only = per.iter().find(|c| c.m == 0 && ev(&c.fit) >= top - margin);
+        let choose_cubic =
+            linear_only.is_none() && cubic.as_ref().is_some_and(|c| ev(&c.fit) >= top - margin);
         // The structures compared, in target units, for the report.
         let units = |e: f64| e - n as f64 * self.ys.ln();
         let d = self.d();
