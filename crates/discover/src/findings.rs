@@ -28,12 +28,14 @@ pub struct Confirmation {
     pub verification: Option<Verification>,
 }
 
-/// A confirmed candidate's figures on the verification run.
+/// A confirmed candidate's figures on the verification run: what the user's own fit gets there
+/// (`tcomp fit` on the training run with the trainer's defaults, its structure chosen by its
+/// evidence), not the joint refit the training run's blocks judge the candidate with.
 #[derive(Clone, Debug, Serialize)]
 pub struct Verification {
     /// What the run was.
     pub run: String,
-    /// Binned residual std of the refitted base feature set on it.
+    /// Binned residual std of the user's fit of the base feature set on it.
     pub residual_std_before: f64,
     /// The same with the candidate added.
     pub residual_std_after: f64,

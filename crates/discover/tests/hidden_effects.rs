@@ -125,6 +125,19 @@ fn case_preset(preset: tcomp_sim::Preset, hidden: Option<EffectKind>) -> Outcome
             "  after adding {exprs:?}: held-out {:.4e} = {:.2}× floor\n",
             ev.binned.residual_std, after_over_floor
         );
+        // The verification figure the diagnosis reports is the user's own fit's: the one just
+        // made, with the trainer's defaults.
+        let reported = d
+            .candidates
+            .first()
+            .and_then(|c| c.confirmation.as_ref())
+            .and_then(|k| k.verification.as_ref())
+            .map(|v| v.residual_std_after);
+        let user = ev.binned.residual_std;
+        assert!(
+            reported.is_some_and(|r| (r - user).abs() <= 1e-9 * user.abs().max(1e-300)),
+            "the diagnosis reports {reported:?} on the verification run, the user's fit gets {user}\n{text}"
+        );
     }
     println!("{text}");
     Outcome {
