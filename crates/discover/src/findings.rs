@@ -16,15 +16,16 @@ pub struct Confirmation {
     pub improvement_pct: f64,
     /// What the held-out data was.
     pub heldout: String,
-    /// Held-out blocks (1 for a verification run) in which the candidate lowered the residual.
+    /// Held-out blocks in which the candidate lowered the residual.
     pub splits_improved: usize,
     /// Held-out blocks.
     pub splits: usize,
     /// Δ log evidence of the trainer's refits on the whole training run: with the candidate
     /// minus without.
     pub delta_log_evidence_refit: f64,
-    /// The same refits on the verification run, when there is one: reported, never used to
-    /// choose (the figures above, on blocks of the training run, are what the criterion reads).
+    /// The user's own fits with and without the candidate on the verification run, when there is
+    /// one and the verdict names the candidate (`confirm::verify`): reported, never used to choose
+    /// (the figures above, on blocks of the training run, are what the criterion reads).
     pub verification: Option<Verification>,
 }
 

@@ -183,7 +183,8 @@ pub struct Diagnosis {
     /// Held-out residual of the base feature set refitted by the trainer (the "before" of every
     /// confirmed candidate).
     pub refit_residual_std_before: f64,
-    /// The same refit's residual on the verification run, when there is one (reported only).
+    /// The user's own fit of the model's features (`tcomp fit`, the trainer's defaults) on the
+    /// verification run, when there is one (reported only: `confirm::verify`).
     pub refit_verification_std_before: Option<f64>,
     /// The noise floor the criterion measured removals against: estimated from the training
     /// blocks' held-out residual.
@@ -318,6 +319,17 @@ pub fn diagnose(
         }
         opts.criterion.apply(refit_before.noise_floor, &mut cands);
     }
+    // The verification run, reported for the candidates the verdict names (see `confirm::verify`).
+    let named = verdict::reported(&cands);
+    let verification_std = confirm::verify(
+        &info,
+        &roles,
+        runs,
+        &opts.confirm,
+        prepared.gap_s,
+        &mut cands,
+        &named,
+    )?;
     let (verdict, verdict_text) = verdict::decide(&cands);
     let diagnosis = Diagnosis {
         verdict,
@@ -339,7 +351,7 @@ pub fn diagnose(
         verify_segments: vsegs,
         verify_worst_intervals: vworst,
         refit_residual_std_before: refit_before.residual_std,
-        refit_verification_std_before: refit_before.verification_std,
+        refit_verification_std_before: verification_std,
         criterion_noise_floor: refit_before.noise_floor,
         elapsed_s: t0.elapsed().as_secs_f64(),
     };

@@ -464,52 +464,27 @@ pub(crate) fn fails_only_placebos(c: &Scored) -> bool {
     c.refines.is_none() && c.placebo.as_ref().is_some_and(|p| !p.passes()) && c.fails.len() == 1
 }
 
-/// The verdict for sorted candidates, with a sentence.
-pub fn decide(cands: &[Scored]) -> (Verdict, String) {
+/// Which candidates a verdict names, and how (see [`decide`]).
+enum Named<'a> {
+    /// Two hypotheses the run cannot tell apart: the first passes, the second is its rival.
+    Rivals(&'a Scored, &'a Scored, Rival),
+    /// One that clears every leg but its placebos, before any that passes.
+    Drift(&'a Scored, &'a crate::placebo::Placebo),
+    /// The first, which passes.
+    First(&'a Scored),
+    /// None passes: the closest, named without its figures.
+    Closest(&'a Scored),
+    /// Nothing was scored.
+    Nothing,
+}
+
+/// What the verdict for sorted candidates names.
+fn named(cands: &[Scored]) -> Named<'_> {
     if let (Some(a), Some((b, how))) = (cands.first(), rival(cands))
         && a.passes
         && a.refines.is_none()
     {
-        let why = match how {
-            Rival::Passes => "two effects clear the criterion and the training run cannot tell \
-                 them apart"
-                .to_string(),
-            Rival::NoWorse => format!(
-                "the first clears the criterion, and the second explains the training run and its \
-                 held-out blocks no worse (it lowers their residual by {:.1} % against {:.1} %) \
-                 but {}",
-                b.improvement_pct,
-                a.improvement_pct,
-                if fails_only_placebos(b) {
-                    "no better than its own columns shifted in time: the run cannot tell whether \
-                     either is more than a drift"
-                } else {
-                    "in fewer of them, too few blocks to decide"
-                }
-            ),
-        };
-        let ev = |c: &Scored| {
-            c.confirmation
-                .as_ref()
-                .map_or(0.0, |k| k.delta_log_evidence_refit)
-        };
-        return (
-            Verdict::CannotTell,
-            format!(
-                "cannot tell: {why} (their refits' log evidence differs by {:.1}): {} — \
-                 {} ({}{}); or {} — {} ({}{}); {}",
-                (ev(a) - ev(b)).abs(),
-                a.effect,
-                instruction(a),
-                heldout_text(a),
-                estimate_text(a),
-                b.effect,
-                instruction(b),
-                heldout_text(b),
-                estimate_text(b),
-                separating_run(a, b)
-            ),
-        );
+        return Named::Rivals(a, b, how);
     }
     let by_placebo = cands
         .iter()
@@ -519,7 +494,72 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
         && let Some(c) = by_placebo
         && let Some(p) = &c.placebo
     {
-        return (
+        return Named::Drift(c, p);
+    }
+    match cands.first() {
+        Some(c) if c.passes => Named::First(c),
+        Some(c) => Named::Closest(c),
+        None => Named::Nothing,
+    }
+}
+
+/// The places in `cands` (sorted) of the candidates whose figures the verdict's sentence gives:
+/// those a verification run is reported for ([`crate::confirm::verify`]).
+pub(crate) fn reported(cands: &[Scored]) -> Vec<usize> {
+    let of = |c: &Scored| cands.iter().position(|k| std::ptr::eq(k, c));
+    match named(cands) {
+        Named::Rivals(a, b, _) => [of(a), of(b)].into_iter().flatten().collect(),
+        Named::Drift(c, _) | Named::First(c) => of(c).into_iter().collect(),
+        Named::Closest(_) | Named::Nothing => Vec::new(),
+    }
+}
+
+/// The verdict for sorted candidates, with a sentence.
+pub fn decide(cands: &[Scored]) -> (Verdict, String) {
+    match named(cands) {
+        Named::Rivals(a, b, how) => {
+            let why = match how {
+                Rival::Passes => "two effects clear the criterion and the training run cannot \
+                     tell them apart"
+                    .to_string(),
+                Rival::NoWorse => format!(
+                    "the first clears the criterion, and the second explains the training run and \
+                     its held-out blocks no worse (it lowers their residual by {:.1} % against \
+                     {:.1} %) but {}",
+                    b.improvement_pct,
+                    a.improvement_pct,
+                    if fails_only_placebos(b) {
+                        "no better than its own columns shifted in time: the run cannot tell \
+                         whether either is more than a drift"
+                    } else {
+                        "in fewer of them, too few blocks to decide"
+                    }
+                ),
+            };
+            let ev = |c: &Scored| {
+                c.confirmation
+                    .as_ref()
+                    .map_or(0.0, |k| k.delta_log_evidence_refit)
+            };
+            (
+                Verdict::CannotTell,
+                format!(
+                    "cannot tell: {why} (their refits' log evidence differs by {:.1}): {} — \
+                     {} ({}{}); or {} — {} ({}{}); {}",
+                    (ev(a) - ev(b)).abs(),
+                    a.effect,
+                    instruction(a),
+                    heldout_text(a),
+                    estimate_text(a),
+                    b.effect,
+                    instruction(b),
+                    heldout_text(b),
+                    estimate_text(b),
+                    separating_run(a, b)
+                ),
+            )
+        }
+        Named::Drift(c, p) => (
             Verdict::CannotTell,
             format!(
                 "cannot tell: {} — {} clears the evidence and held-out legs ({}{}) but explains the \
@@ -534,10 +574,8 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
                 p.statistic,
                 p.threshold
             ),
-        );
-    }
-    match cands.first() {
-        Some(c) if c.passes && c.refines.is_none() => (
+        ),
+        Named::First(c) if c.refines.is_none() => (
             Verdict::MissingEffect,
             format!(
                 "missing effect: {} — {} (Δ log evidence {}; {}{})",
@@ -548,7 +586,7 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
                 estimate_text(c)
             ),
         ),
-        Some(c) if c.passes => (
+        Named::First(c) => (
             Verdict::None,
             format!(
                 "no significant missing effect; a refinement passes the criterion: {} — {} ({}{})",
@@ -558,7 +596,7 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
                 estimate_text(c)
             ),
         ),
-        Some(c) => (
+        Named::Closest(c) => (
             Verdict::None,
             format!(
                 "no significant missing effect: no candidate clears the criterion (closest: {}, {})",
@@ -566,7 +604,7 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
                 c.fails.join("; ")
             ),
         ),
-        None => (
+        Named::Nothing => (
             Verdict::None,
             "no significant missing effect: no candidate could be scored".into(),
         ),
@@ -733,5 +771,50 @@ mod tests {
         };
         crit.apply(0.1, &mut cands);
         assert_eq!(decide(&cands).0, Verdict::MissingEffect);
+    }
+
+    /// The candidates whose figures the sentence gives are the ones a verification run is reported
+    /// for: the one named, both rivals, the one that fails only its placebos, none when nothing
+    /// passes (the closest is named without figures).
+    #[test]
+    fn the_reported_candidates_are_those_the_sentence_gives_figures_for() {
+        let sorted = |mut cands: Vec<Scored>| {
+            Criterion::default().apply(0.1, &mut cands);
+            cands
+        };
+        let one = sorted(vec![
+            cand("lag(T, 300)", 12.0, true),
+            cand("rate(T)", 5.0, true),
+        ]);
+        assert_eq!(reported(&one), [0]);
+        let two = sorted(vec![
+            cand("lag(T, 300)", 10.4, true),
+            cand("sq(T)", 2.0, false),
+            cand("rate(T)", 10.0, true),
+        ]);
+        assert_eq!(decide(&two).0, Verdict::CannotTell);
+        let names: Vec<&str> = reported(&two)
+            .iter()
+            .map(|&i| two[i].expression.as_str())
+            .collect();
+        assert_eq!(names, ["lag(T, 300)", "rate(T)"]);
+        let drift = sorted(vec![cand("warmup(900)", 12.0, false)]);
+        assert_eq!(reported(&drift), [0]);
+        let mut weak = cand("warmup(900)", 12.0, false);
+        weak.improvement_pct = 1.0;
+        let none = sorted(vec![weak]);
+        assert_eq!(decide(&none).0, Verdict::None);
+        assert!(reported(&none).is_empty());
+        for cands in [&one, &two, &drift, &none] {
+            let text = decide(cands).1;
+            for (i, c) in cands.iter().enumerate() {
+                assert_eq!(
+                    reported(cands).contains(&i),
+                    text.contains(&instruction(c)),
+                    "{}: {text}",
+                    c.expression
+                );
+            }
+        }
     }
 }

@@ -16,7 +16,9 @@ pub struct Args {
     /// The run to diagnose (normally the training run), CSV or .csv.gz.
     #[command(flatten)]
     pub run: RunArgs,
-    /// A held-out run (else contiguous blocks of --data are held out in turn).
+    /// A verification run: where the model fails on it, and the residual there of your own fit
+    /// with each effect the verdict names (reported, never used to choose; the choice holds out
+    /// blocks of --data in turn).
     #[arg(long)]
     pub verify: Option<PathBuf>,
     /// Column for segment detection [default: the program's first input].
