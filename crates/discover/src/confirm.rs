@@ -686,16 +686,20 @@ pub(crate) fn verify(
         .map(|job| {
             let features = refits.features(job.and_then(|i| shared.get(i)));
             heldout_std_with(&refits, std::slice::from_ref(&sp), &refits.users(&features))
+                .ok()
                 .map(|f| f.pooled)
         })
-        .collect::<Result<Vec<f64>>>()?;
-    let Some((&before, after)) = figures.split_first() else {
+        .collect::<Vec<Option<f64>>>();
+    // A figure that is only reported fails alone: a fit that cannot be made leaves it out, and
+    // the verdict stands as the training run decided it.
+    let Some((&Some(before), after)) = figures.split_first() else {
         return Ok(None);
     };
     for (job, &after) in jobs.iter().skip(1).zip(after) {
-        let Some(k) = job
+        let Some((k, after)) = job
             .and_then(|i| cands.get_mut(i))
             .and_then(|c| c.confirmation.as_mut())
+            .zip(after)
         else {
             continue;
         };
