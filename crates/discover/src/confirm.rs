@@ -27,6 +27,10 @@
 //! held-out run is never used to choose. A candidate that replaces some of the model's features
 //! (a lag of T in place of T) is refitted with the replaced feature set. Each confirmed candidate
 //! also carries the Δ log evidence of the real refits, which ranks the candidates that pass.
+//!
+//! After them, the leader is joined with each of the next refitted candidates, and the union that
+//! earns its place over both parts is refitted and judged like any candidate ([`together`]): two
+//! effects missing at once, each standing in for the other in part, are named together.
 
 pub use crate::findings::{Confirmation, Verification};
 use crate::score::{Prepared, Scored};
@@ -41,6 +45,7 @@ use tcomp_train::{Dataset, FitOptions, Roles, metrics};
 pub(crate) const VOTE: &str = "lowers the held-out residual in only";
 
 mod blocks;
+pub mod together;
 use blocks::{Split, block_splits, parts_of, training_blocks, verification_split};
 
 /// Options of the confirmation.
@@ -483,7 +488,7 @@ pub fn confirm(
     info: &ModelInfo,
     roles: &Roles,
     runs: Runs<'_>,
-    cands: &mut [Scored],
+    cands: &mut Vec<Scored>,
     opts: &ConfirmOptions,
     prepared: &Prepared,
 ) -> Result<BaseRefit> {
@@ -599,48 +604,78 @@ pub fn confirm(
             opts.top
         ));
     }
+    // How a refitted candidate is judged on the blocks (its figures and whole-run evidence).
+    let judge = |c: &mut Scored, figures: HeldOutFigures, evidence: f64| {
+        let voting = voting_blocks(info, roles, data, prepared.gap_s, &splits, c);
+        let mut splits_improved = figures
+            .each
+            .iter()
+            .zip(&base_figures.each)
+            .zip(&voting)
+            .filter(|((a, b), v)| **v && a < b)
+            .count();
+        let mut n = voting.iter().filter(|v| **v).count();
+        let (mut before, mut after, mut heldout) = (before, figures.pooled, heldout.clone());
+        if figures.each.len() > 1
+            && n <= 1
+            && let Some((b, a, k, v, what)) = localized(&refits, opts, &splits, c)
+        {
+            (before, after, splits_improved, n, heldout) = (b, a, k, v, what);
+        }
+        let improvement_pct = 100.0 * (1.0 - after / before);
+        c.confirmation = Some(Confirmation {
+            residual_std_before: before,
+            residual_std_after: after,
+            improvement_pct,
+            heldout,
+            splits_improved,
+            splits: n,
+            delta_log_evidence_refit: evidence - base_evidence,
+            verification: None,
+        });
+        c.residual_std_before = before;
+        c.residual_std_after = after;
+        c.improvement_pct = improvement_pct;
+        // With blocks, a real effect lowers the residual in most of them; a pooled gain that
+        // one block carries is more likely that block's drift. Only the blocks where the
+        // candidate moves vote (see `voting_blocks`).
+        c.unconfirmed = (figures.each.len() > 1 && 2 * splits_improved <= n)
+            .then(|| format!("{} {splits_improved} of {n} blocks", VOTE));
+    };
     for (i, r) in outcome {
         let Some(c) = cands.get_mut(i) else { continue };
         match r {
-            Ok((figures, evidence)) => {
-                let voting = voting_blocks(info, roles, data, prepared.gap_s, &splits, c);
-                let mut splits_improved = figures
-                    .each
-                    .iter()
-                    .zip(&base_figures.each)
-                    .zip(&voting)
-                    .filter(|((a, b), v)| **v && a < b)
-                    .count();
-                let mut n = voting.iter().filter(|v| **v).count();
-                let (mut before, mut after, mut heldout) =
-                    (before, figures.pooled, heldout.clone());
-                if figures.each.len() > 1
-                    && n <= 1
-                    && let Some((b, a, k, v, what)) = localized(&refits, opts, &splits, c)
-                {
-                    (before, after, splits_improved, n, heldout) = (b, a, k, v, what);
-                }
-                let improvement_pct = 100.0 * (1.0 - after / before);
-                c.confirmation = Some(Confirmation {
-                    residual_std_before: before,
-                    residual_std_after: after,
-                    improvement_pct,
-                    heldout,
-                    splits_improved,
-                    splits: n,
-                    delta_log_evidence_refit: evidence - base_evidence,
-                    verification: None,
-                });
-                c.residual_std_before = before;
-                c.residual_std_after = after;
-                c.improvement_pct = improvement_pct;
-                // With blocks, a real effect lowers the residual in most of them; a pooled gain that
-                // one block carries is more likely that block's drift. Only the blocks where the
-                // candidate moves vote (see `voting_blocks`).
-                c.unconfirmed = (figures.each.len() > 1 && 2 * splits_improved <= n)
-                    .then(|| format!("{} {splits_improved} of {n} blocks", VOTE));
-            }
+            Ok((figures, evidence)) => judge(c, figures, evidence),
             Err(e) => c.unconfirmed = Some(format!("the refit with it failed: {e}")),
+        }
+    }
+    // Two effects that explain the run only together ([`together`]): the unions' whole-run
+    // refits, and the blocks of the one that earns its place.
+    let unions = together::pairs(cands);
+    if !unions.is_empty() {
+        let wholes: Vec<(Scored, f64, Option<Basis>)> = unions
+            .into_par_iter()
+            .map(|u| {
+                let (evidence, basis) = refits.whole(&refits.features(Some(&u)));
+                (u, evidence - base_evidence, basis)
+            })
+            .collect();
+        if let Some((mut u, gain, basis)) = together::earning(wholes)
+            && let Ok(figures) = heldout_std(&refits, &splits, &refits.features(Some(&u)), basis)
+            && let Ok(s) = crate::score::score_member(prepared, &u.candidate())
+        {
+            // The scoring's figures, as every candidate carries them (leg 1 reads its evidence).
+            let scored_before = prepared.figures.heldout_residual_std;
+            u.delta_log_evidence = s.delta;
+            u.delta_log_evidence_best = s.delta;
+            u.train_residual_std_after = s.train_std;
+            u.scored_improvement_pct = if scored_before > 0.0 {
+                100.0 * (1.0 - s.heldout_std / scored_before)
+            } else {
+                0.0
+            };
+            judge(&mut u, figures, base_evidence + gain);
+            cands.push(u);
         }
     }
     Ok(base)

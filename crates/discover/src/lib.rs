@@ -11,7 +11,8 @@
 //! the base model `base` prepares once from the columns and transform of `design`, each
 //! expression's column computed once per run, `column_cache`),
 //! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`confirm`] (the
-//! leading candidates refitted by the trainer), [`placebo`] (each against its own columns shifted
+//! leading candidates refitted by the trainer; two effects that explain the run only together,
+//! [`confirm::together`]), [`placebo`] (each against its own columns shifted
 //! in time, under AR(1) noise; what both found, `findings`), [`verdict`] (the stated criterion: a missing effect, "cannot tell"
 //! or none). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
 //! in the tool (`host-tools/src/render/`, `host-tools/src/demo/`): this crate analyses, it does not
@@ -284,7 +285,10 @@ pub fn diagnose(
     let retest: Vec<usize> = (0..cands.len())
         .filter(|&i| {
             cands.get(i).is_some_and(|c| {
-                c.search.is_none() && !c.searched.is_read() && verdict::fails_only_placebos(c)
+                c.search.is_none()
+                    && !c.searched.is_read()
+                    && c.joined.is_empty()
+                    && verdict::fails_only_placebos(c)
             })
         })
         .take(2)

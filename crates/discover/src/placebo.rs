@@ -47,6 +47,8 @@
 //!   prior group, automatic relevance determination), as the candidate is the bank's reading; a
 //!   composition's placebos are each the best of its members across its parameters on the
 //!   shifted columns ([`crate::compose`]), as the candidate is the best of them on the run.
+//! - **Two effects named together** ([`crate::confirm::together`]): each part against its own
+//!   placebos beside the other part unshifted, with a threshold of its own (`joined_placebo`).
 //!
 //! Tried and not kept: placebo *runs* — the base fit plus its residual shifted in time (Freedman
 //! and Lane's permutation of the reduced model's residual). On the dev seeds of the negative
@@ -152,17 +154,111 @@ fn shifts(cols: &[Vec<f64>], n: usize, k: usize) -> Vec<usize> {
 /// `base_evidence`: the columns one prior group, or with `each` one group per column (a bank, its
 /// columns switched on and off by automatic relevance determination as the bank was read).
 fn statistic(p: &Prepared, rho: f64, base_evidence: f64, cols: &[Vec<f64>], each: bool) -> f64 {
-    let (phi, mut groups, mut a0) = p.with_columns(cols);
-    if each {
-        let g = p.groups.iter().copied().max().unwrap_or(0) + 1;
-        let k = groups.len() - cols.len();
-        for (j, slot) in groups.iter_mut().skip(k).enumerate() {
-            *slot = g + j;
+    statistic_of_sets(p, rho, base_evidence, &[(cols.to_vec(), each)])
+}
+
+/// [`statistic`] of several column sets beside each other, each its own prior group (or, with its
+/// flag, one per column).
+fn statistic_of_sets(
+    p: &Prepared,
+    rho: f64,
+    base_evidence: f64,
+    sets: &[(Vec<Vec<f64>>, bool)],
+) -> f64 {
+    let cols: Vec<Vec<f64>> = sets.iter().flat_map(|(c, _)| c.iter().cloned()).collect();
+    let (phi, mut groups, mut a0) = p.with_columns(&cols);
+    let mut g = p.groups.iter().copied().max().unwrap_or(0) + 1;
+    let k = groups.len() - cols.len();
+    let mut slots = groups.iter_mut().skip(k);
+    for (set, each) in sets {
+        for (j, slot) in slots.by_ref().take(set.len()).enumerate() {
+            *slot = if *each { g + j } else { g };
         }
-        a0.resize(g + cols.len(), 1.0);
+        g += if *each { set.len() } else { 1 };
     }
+    a0.resize(g, 1.0);
     ar1::fit(&phi, &p.y, &groups, (&a0, p.base.beta), rho, &[])
         .map_or(f64::NEG_INFINITY, |(_, e)| e - base_evidence)
+}
+
+/// The placebo test of a union of candidates ([`crate::confirm::together`]): each part's
+/// statistic is its gain beside the other parts (Δ log evidence under AR(1) noise of all the parts
+/// over all but it), against the same gain of its placebos — its own column sets shifted in time
+/// beside the other parts unshifted, searched as the part alone would be. The union passes when
+/// every part beats its own placebos; the part that passes by the least is reported. Why its own
+/// threshold, not every candidate's: a union holds a real part whenever its leader is real, and
+/// the placebos of a union shifted whole would lose that part too — any union would pass them,
+/// and beside them every single candidate would fail.
+fn joined_placebo(
+    p: &Prepared,
+    rho: f64,
+    base_evidence: f64,
+    c: &Scored,
+    placebos: usize,
+) -> Option<Placebo> {
+    let n = p.y.len();
+    let sets: Vec<Vec<(Vec<Vec<f64>>, bool)>> = c
+        .joined
+        .iter()
+        .map(|j| member_sets(p, j))
+        .collect::<Option<_>>()?;
+    let mut weakest: Option<Placebo> = None;
+    for (k, mine) in sets.iter().enumerate() {
+        let rest: Vec<(Vec<Vec<f64>>, bool)> = sets
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != k)
+            .filter_map(|(_, s)| s.first().cloned())
+            .collect();
+        let without = statistic_of_sets(p, rho, base_evidence, &rest);
+        let own = mine.first()?;
+        let s = shifts(&own.0, n, placebos);
+        let jobs: Vec<(usize, usize)> = (0..mine.len())
+            .flat_map(|m| s.iter().map(move |&sh| (m, sh)))
+            .collect();
+        let stats: Vec<f64> = jobs
+            .par_iter()
+            .map(|&(m, sh)| {
+                let (cols, each) = &mine[m];
+                let mut all = rest.clone();
+                all.push((cols.iter().map(|c| rolled(c, sh)).collect(), *each));
+                statistic_of_sets(p, rho, base_evidence, &all) - without
+            })
+            .collect();
+        let each: Vec<f64> = s
+            .iter()
+            .map(|&sh| {
+                jobs.iter()
+                    .zip(&stats)
+                    .filter(|((_, x), _)| *x == sh)
+                    .map(|(_, v)| *v)
+                    .fold(f64::NEG_INFINITY, f64::max)
+            })
+            .collect();
+        let threshold = each.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mut all = rest.clone();
+        all.push(own.clone());
+        let statistic = statistic_of_sets(p, rho, base_evidence, &all)
+            - without
+            - c.joined.get(k).map_or(0.0, |j| shape_prior(&j.searched));
+        let placebo = Placebo {
+            rho,
+            statistic,
+            shifts_bins: s,
+            bins: n,
+            level: 1.0 / (each.len() + 1) as f64,
+            placebos: each,
+            threshold,
+            refit: None,
+        };
+        if weakest
+            .as_ref()
+            .is_none_or(|w| statistic - threshold < w.statistic - w.threshold)
+        {
+            weakest = Some(placebo);
+        }
+    }
+    weakest
 }
 
 /// A tested candidate: its index, its column sets (at its parameter, then across its family's
@@ -206,39 +302,10 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
     let tested: Vec<Tested> = cands
         .iter()
         .enumerate()
-        .filter(|(_, c)| c.confirmation.is_some())
+        .filter(|(_, c)| c.confirmation.is_some() && c.joined.is_empty())
         .filter_map(|(i, c)| {
-            let cols = p.standardised_training(&c.expressions).ok()?;
-            let s = shifts(&cols, n, placebos);
-            let mut members = vec![(cols, false)];
-            if let Some(search) = &c.search {
-                for v in family_grid(search.lo, search.hi) {
-                    let m = search.template.member(v);
-                    if let Ok(cols) = p.standardised_training(&m.expressions) {
-                        members.push((cols, false));
-                    }
-                }
-            }
-            match &c.searched {
-                Searched::No => {}
-                Searched::Bank(bank) => {
-                    // One expression at a time: a feature program holds a few features, not a
-                    // bank.
-                    let cols: Option<Vec<Vec<f64>>> = bank
-                        .iter()
-                        .map(|e| p.standardised_training(std::slice::from_ref(e)).ok())
-                        .collect::<Option<Vec<_>>>()
-                        .map(|v| v.into_iter().flatten().collect());
-                    members.extend(cols.map(|b| (b, true)));
-                }
-                Searched::Alternatives { members: alts, .. } => {
-                    for e in alts {
-                        if let Ok(cols) = p.standardised_training(std::slice::from_ref(e)) {
-                            members.push((cols, false));
-                        }
-                    }
-                }
-            }
+            let members = member_sets(p, c)?;
+            let s = shifts(&members[0].0, n, placebos);
             Some((i, members, s))
         })
         .collect();
@@ -298,6 +365,50 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
             });
         }
     }
+    // Unions of candidates ([`crate::confirm::together`]): each part against its own placebos.
+    for c in cands
+        .iter_mut()
+        .filter(|c| c.confirmation.is_some() && !c.joined.is_empty())
+    {
+        c.placebo = joined_placebo(p, rho, base_evidence, c, placebos);
+    }
+}
+
+/// The column sets a candidate's placebos are searched over: its columns at its parameter first,
+/// then across its family's range, its bank or its alternatives (each with whether its columns are
+/// one prior group each). None when its columns cannot be computed.
+fn member_sets(p: &Prepared, c: &Scored) -> Option<Vec<(Vec<Vec<f64>>, bool)>> {
+    let cols = p.standardised_training(&c.expressions).ok()?;
+    let mut members = vec![(cols, false)];
+    if let Some(search) = &c.search {
+        for v in family_grid(search.lo, search.hi) {
+            let m = search.template.member(v);
+            if let Ok(cols) = p.standardised_training(&m.expressions) {
+                members.push((cols, false));
+            }
+        }
+    }
+    match &c.searched {
+        Searched::No => {}
+        Searched::Bank(bank) => {
+            // One expression at a time: a feature program holds a few features, not a
+            // bank.
+            let cols: Option<Vec<Vec<f64>>> = bank
+                .iter()
+                .map(|e| p.standardised_training(std::slice::from_ref(e)).ok())
+                .collect::<Option<Vec<_>>>()
+                .map(|v| v.into_iter().flatten().collect());
+            members.extend(cols.map(|b| (b, true)));
+        }
+        Searched::Alternatives { members: alts, .. } => {
+            for e in alts {
+                if let Ok(cols) = p.standardised_training(std::slice::from_ref(e)) {
+                    members.push((cols, false));
+                }
+            }
+        }
+    }
+    Some(members)
 }
 
 /// The log prior odds against a composition chosen among many shapes (nats): each of the `among`

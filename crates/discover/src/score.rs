@@ -94,6 +94,10 @@ pub struct Scored {
     pub passes: bool,
     /// Why it does not (set by the verdict).
     pub fails: Vec<String>,
+    /// The candidates this one joins, when it is two effects that explain the run only together
+    /// ([`crate::confirm::together`]); empty for a single effect.
+    #[serde(skip)]
+    pub joined: Vec<Scored>,
 }
 
 impl Scored {
@@ -123,13 +127,17 @@ pub struct Skipped {
 
 /// A member's score.
 #[derive(Clone, Debug)]
-struct MemberScore {
-    delta: f64,
-    heldout_std: f64,
-    train_std: f64,
+pub(crate) struct MemberScore {
+    pub(crate) delta: f64,
+    pub(crate) heldout_std: f64,
+    pub(crate) train_std: f64,
 }
 
-fn score_member(p: &Prepared, c: &Candidate) -> std::result::Result<MemberScore, String> {
+/// The scoring design's figures of `c`'s columns added to the base's (one prior group).
+pub(crate) fn score_member(
+    p: &Prepared,
+    c: &Candidate,
+) -> std::result::Result<MemberScore, String> {
     let (cols, vcols) = p.standardised(&c.expressions).map_err(|e| e.to_string())?;
     // Refuse columns the model's features already span linearly (bias + linear columns). The
     // Gaussians are left out on purpose: a product or square of existing features is expressible
@@ -242,6 +250,7 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             placebo: None,
             passes: false,
             fails: Vec::new(),
+            joined: Vec::new(),
         });
     }
     (scored, skipped)

@@ -664,6 +664,7 @@ mod tests {
             }),
             passes: false,
             fails: Vec::new(),
+            joined: Vec::new(),
         }
     }
 

@@ -486,3 +486,104 @@ scenarios! {
     #[ignore = "a known miss: run with --ignored to measure it"]
     a_kink_in_a_second_input: "kink in a second input", Qma, [Poly], 115, "abs(heater_v - 12.1)", 6.0, true, 0.25;
 }
+
+/// Two of the sensor's own effects hidden at once from a model of the rest, which stand in for
+/// each other in part: the rate of the mean temperature and the thermal gradients of the RLG (a
+/// gradient follows the rate during a ramp), or the rate and the Shupe term of the IFOG. Each alone
+/// made the verification run worse on the RLG preset (see [`tcomp_discover::confirm::together`]).
+/// Returns the verdict, the ratio after adding what it names, the one before, the least-squares
+/// limit of the truth form, and the text.
+fn two_hidden(
+    sensor: SensorKind,
+    hidden: [EffectKind; 2],
+    seed: u64,
+) -> (Verdict, f64, f64, f64, String) {
+    let case = base_case(
+        presets::with_effects(sensor, &[EffectKind::Poly, hidden[0], hidden[1]])
+            .unwrap()
+            .with_seed(seed),
+        &hidden,
+    );
+    let o = run(&case);
+    let features = if o.diagnosis.verdict == Verdict::MissingEffect {
+        o.top().candidate().applied_to(&case.base)
+    } else {
+        case.base.clone()
+    };
+    let after = after_ratio(&case, &features);
+    let before = after_ratio(&case, &case.base);
+    let limit = limit_ratio(&case);
+    let text = format!(
+        "{sensor:?} seed {seed}, {hidden:?} hidden from {:?}\n{}  after {features:?}: \
+         {after:.2}× the floor (before {before:.2}×, limit {limit:.2}×)",
+        case.base, o.text
+    );
+    println!("{text}");
+    println!(
+        "TWO-HIDDEN {sensor:?} {seed}: {:?}, {after:.2}× (before {before:.2}×, limit {limit:.2}×)",
+        o.diagnosis.verdict
+    );
+    (o.diagnosis.verdict, after, before, limit, text)
+}
+
+/// Asserts what a diagnosis of two missing effects owes the user: it says something is missing
+/// (a named effect or "cannot tell", never "none"), and what it names lowers the verification
+/// run to 1.2× the floor, or 1.2× the least-squares limit when that stays above the floor.
+fn check_two_hidden(sensor: SensorKind, hidden: [EffectKind; 2], seed: u64) {
+    let (verdict, after, before, limit, text) = two_hidden(sensor, hidden, seed);
+    assert_ne!(verdict, Verdict::None, "{text}");
+    if verdict == Verdict::MissingEffect {
+        assert!(after < before, "{text}");
+        assert!(after <= AFTER_TARGET * limit.max(1.0), "{text}");
+    }
+}
+
+/// RLG seeds seen while the unions were built (seed 0 "cannot tell"; 302 the gradients and the
+/// rate of a gradient named together, 1.02× where the limit is 1.01×).
+#[test]
+fn two_effects_missing_at_once() {
+    for seed in [0, 302] {
+        check_two_hidden(
+            SensorKind::Rlg,
+            [EffectKind::Rate, EffectKind::Gradient],
+            seed,
+        );
+    }
+}
+
+/// Held out from the design of the unions: fresh RLG seeds, and the IFOG's rate and Shupe term.
+/// Measured once (figures in BENCHMARKS.md): RLG 303–305 the gradients and the rate of a gradient
+/// named together, 1.04×, 0.99×, 1.06× (limits 1.03×, 1.08×, 1.01×); IFOG 306 and 307 the true
+/// pair named together, 1.39× where the limit is 1.12× and 1.12× (limit 1.02×) — on 306 the
+/// trainer's fit of the true features falls short (issue 25's side), and the test's bound fails.
+#[test]
+#[ignore = "held-out scenarios, measured once: run with --ignored"]
+fn two_effects_missing_at_once_on_fresh_runs() {
+    let mut failed = Vec::new();
+    let cases = [
+        (
+            SensorKind::Rlg,
+            [EffectKind::Rate, EffectKind::Gradient],
+            303,
+        ),
+        (
+            SensorKind::Rlg,
+            [EffectKind::Rate, EffectKind::Gradient],
+            304,
+        ),
+        (
+            SensorKind::Rlg,
+            [EffectKind::Rate, EffectKind::Gradient],
+            305,
+        ),
+        (SensorKind::Ifog, [EffectKind::Rate, EffectKind::Shupe], 306),
+        (SensorKind::Ifog, [EffectKind::Rate, EffectKind::Shupe], 307),
+    ];
+    for (sensor, hidden, seed) in cases {
+        let r = std::panic::catch_unwind(|| check_two_hidden(sensor, hidden, seed));
+        if r.is_err() {
+            failed.push(format!("{sensor:?} {seed}"));
+        }
+    }
+    assert!(failed.is_empty(), "failed: {failed:?}");
+}

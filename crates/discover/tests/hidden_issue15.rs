@@ -206,8 +206,10 @@ fn gappy_2hz_log_with_a_lag() {
 }
 
 /// Two effects hidden at once in an RLG (its anode–shell gradient and a supply-voltage
-/// sensitivity), verification ramps faster than training: the first round names one, the second
-/// round, from the model refitted with it, the other, and the third finds nothing.
+/// sensitivity), verification ramps faster than training: both are named — together in the first
+/// round when each earns its place beside the other ([`tcomp_discover::confirm::together`], as
+/// on this seed), or one per round, the second from the model refitted with the first — and the
+/// round after them finds nothing.
 #[test]
 fn two_effects_in_two_rounds() {
     let kinds = [
@@ -236,11 +238,12 @@ fn two_effects_in_two_rounds() {
         text += &describe(&case, &a.diagnosis);
     }
     text += &format!("stopped: {}\n", r.stopped);
-    let kinds: Vec<EffectKind> = r.applied.iter().map(|a| a.kind).collect();
-    assert_eq!(kinds.len(), 2, "{text}");
-    assert!(kinds.contains(&EffectKind::Gradient), "{text}");
-    assert!(kinds.contains(&EffectKind::NonThermal), "{text}");
-    assert_eq!(r.analyses.len(), 3, "{text}");
+    let added: Vec<&String> = r.applied.iter().flat_map(|a| &a.expressions).collect();
+    for e in ["supply_v", "t_anode_c - t_shell_c"] {
+        assert!(added.iter().any(|a| *a == e), "{e} not added\n{text}");
+    }
+    assert!(r.applied.len() <= 2, "{text}");
+    assert_eq!(r.analyses.len(), r.applied.len() + 1, "{text}");
     assert_eq!(
         r.analyses.last().map(|a| a.diagnosis.verdict),
         Some(Verdict::None),
