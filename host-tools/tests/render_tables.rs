@@ -28,20 +28,48 @@ fn demo_rows(text: &str) -> Vec<(bool, String)> {
         .collect()
 }
 
-/// (passes, effect) of each row of the candidate table of `tcomp diagnose`.
+/// (passes, effect) of each row of the candidate table of `tcomp diagnose`: a row's first line
+/// (`  ✔  ` or five spaces, then the effect's first words and the figures), the rest of its effect
+/// wrapped on lines indented by seven, then its expressions after `= `.
 fn diagnose_rows(text: &str) -> Vec<(bool, String)> {
-    text.lines()
-        .skip_while(|l| !l.trim_end().ends_with(" expression"))
+    let mut rows: Vec<(bool, String)> = Vec::new();
+    for l in text
+        .lines()
+        .skip_while(|l| !l.trim_end().ends_with("AR(1)/placebo"))
         .skip(1)
         .take_while(|l| l.starts_with("  ") && !l.starts_with("  skipped"))
-        .map(|l| {
-            let row = l.trim_start();
-            let passes = row.starts_with('✔');
-            let row = row.trim_start_matches('✔').trim_start();
-            let effect = row.split("  ").next().unwrap_or("").trim().to_string();
-            (passes, effect)
-        })
-        .collect()
+    {
+        if let Some(rest) = l.strip_prefix("       ") {
+            if !rest.starts_with("= ")
+                && let Some(row) = rows.last_mut()
+            {
+                row.1 = format!("{} {}", row.1, rest.trim());
+            }
+            continue;
+        }
+        let row = l.trim_start();
+        let passes = row.starts_with('✔');
+        let row = row.trim_start_matches('✔').trim_start();
+        let effect = row.split("  ").next().unwrap_or("").trim().to_string();
+        rows.push((passes, effect));
+    }
+    rows
+}
+
+/// The table of `tcomp diagnose` fits a 100-column page: every line of it, however long the
+/// effect's name, with the figures under their header.
+fn assert_fits(text: &str) {
+    for l in text
+        .lines()
+        .skip_while(|l| !l.trim_end().ends_with("AR(1)/placebo"))
+        .take_while(|l| l.starts_with("  ") && !l.starts_with("  skipped"))
+        .filter(|l| !l.trim_start().starts_with("= "))
+    {
+        assert!(
+            l.chars().count() <= 100,
+            "wider than the page:\n{l}\n{text}"
+        );
+    }
 }
 
 #[test]
@@ -65,4 +93,5 @@ fn demo_and_diagnose_print_the_same_candidates() {
     assert!(b.len() >= a.len(), "too few candidates:\n{diagnose}");
     assert_eq!(a, b[..a.len()], "demo:\n{demo}\ndiagnose:\n{diagnose}");
     assert!(a.iter().any(|r| r.0), "no candidate passes:\n{demo}");
+    assert_fits(&diagnose);
 }

@@ -42,31 +42,56 @@ pub fn placebo(c: &Scored) -> String {
     )
 }
 
+/// Width of the effect column of [`Layout::Columns`]: a longer name wraps inside it, so the row's
+/// figures stay where the header puts them and the table fits a 100-column page.
+pub const EFFECT_WIDTH: usize = 40;
+
+/// Indent of a row's continuation lines (the rest of its effect, then its expressions).
+const CONTINUATION: &str = "       ";
+
 /// Appends the first `top` candidates of `candidates` (best first) to `out`.
+///
+/// In [`Layout::Columns`] a row is its effect wrapped to [`EFFECT_WIDTH`] with the figures beside
+/// its first line, then the expressions to paste on a line of their own after `= `: a table one
+/// page wide, whose held-out column a long name (a composition, two effects named together) never
+/// pushes off the page.
 pub fn table(out: &mut String, candidates: &[Scored], top: usize, layout: Layout<'_>) {
     if let Layout::Columns { .. } = layout {
         let _ = writeln!(
             out,
-            "  {:<3}{:<58} {:>9} {:>14} {:>9}  {:<8} {:>15}  expression",
-            "", "effect", "Δ ln E", "held-out", "change", "from", "AR(1) / placebo"
+            "  {:<3}{:<w$} {:>8} {:>13} {:>8}  {:<7} {:>13}",
+            "",
+            "effect",
+            "Δ ln E",
+            "held-out",
+            "change",
+            "from",
+            "AR(1)/placebo",
+            w = EFFECT_WIDTH
         );
     }
     for c in candidates.iter().take(top) {
         let refitted = c.confirmation.is_some();
         match layout {
             Layout::Columns { unit } => {
+                let lines = textwrap::wrap(&c.effect, EFFECT_WIDTH);
+                let first = lines.first().map_or("", |l| l.as_ref());
                 let _ = writeln!(
                     out,
-                    "  {:<3}{:<58} {:>+9.1} {:>14} {:>9}  {:<8} {:>15}  {}",
+                    "  {:<3}{:<w$} {:>+8.1} {:>13} {:>8}  {:<7} {:>13}",
                     if c.passes { "✔" } else { "" },
-                    c.effect,
+                    first,
                     c.delta_log_evidence,
                     num(c.residual_std_after, unit),
                     pct(change_pct(c.residual_std_before, c.residual_std_after)),
                     if refitted { "refit" } else { "scoring" },
                     placebo(c),
-                    c.expressions.join(" ; ")
+                    w = EFFECT_WIDTH
                 );
+                for l in lines.iter().skip(1) {
+                    let _ = writeln!(out, "{CONTINUATION}{l}");
+                }
+                let _ = writeln!(out, "{CONTINUATION}= {}", c.expressions.join(" ; "));
             }
             Layout::Narrative { unit } => {
                 let _ = writeln!(
