@@ -612,15 +612,15 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
     use crate::confirm::Confirmation;
     use crate::placebo::Placebo;
     use tcomp_core::EffectKind;
 
     /// A refitted candidate `expr` whose refit gained `evidence` nats and that beat (or not) its
-    /// placebos (the tests of `crate::confirm::together` build on it too).
-    pub(crate) fn cand(expr: &str, evidence: f64, beats_placebos: bool) -> Scored {
+    /// placebos.
+    fn cand(expr: &str, evidence: f64, beats_placebos: bool) -> Scored {
         Scored {
             expression: expr.into(),
             expressions: vec![expr.into()],

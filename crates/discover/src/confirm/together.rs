@@ -105,12 +105,46 @@ pub(super) fn earning<T>(unions: Vec<(Scored, f64, T)>) -> Option<(Scored, f64, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    /// A refitted candidate reading `exprs`, its refit `gain` nats over the model.
+    use crate::findings::Confirmation;
+
     fn refitted(exprs: &[&str], gain: f64) -> Scored {
-        let mut c = crate::verdict::tests::cand(exprs[0], gain, true);
-        c.expressions = exprs.iter().map(|e| e.to_string()).collect();
-        c.effect = format!("effect {}", c.expressions.join(", "));
-        c
+        let expressions: Vec<String> = exprs.iter().map(|e| e.to_string()).collect();
+        Scored {
+            expression: expressions[0].clone(),
+            effect: format!("effect {}", expressions.join(", ")),
+            expressions,
+            kind: tcomp_core::EffectKind::LaggedElement,
+            parameter: None,
+            delta_log_evidence: gain,
+            delta_log_evidence_best: gain,
+            residual_std_after: 1.0,
+            residual_std_before: 2.0,
+            improvement_pct: 50.0,
+            scored_improvement_pct: 50.0,
+            unconfirmed: None,
+            train_residual_std_after: 1.0,
+            members: 1,
+            replaces: Vec::new(),
+            refines: None,
+            search: None,
+            searched: Searched::No,
+            estimate: None,
+            parameter_scored: None,
+            placebo: None,
+            passes: false,
+            fails: Vec::new(),
+            joined: Vec::new(),
+            confirmation: Some(Confirmation {
+                residual_std_before: 2.0,
+                residual_std_after: 1.0,
+                improvement_pct: 50.0,
+                heldout: "blocks".into(),
+                splits_improved: 2,
+                splits: 3,
+                delta_log_evidence_refit: gain,
+                verification: None,
+            }),
+        }
     }
 
     /// The leader is joined with the others that add columns of their own, best first; a
