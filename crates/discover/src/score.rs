@@ -255,3 +255,46 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
     }
     (scored, skipped)
 }
+
+/// A refitted candidate reading `exprs`, its refit `evidence` nats over the model, not yet tested
+/// against placebos: the fixture of the verdict's and the unions' tests.
+#[cfg(test)]
+pub(crate) fn refitted(exprs: &[&str], evidence: f64) -> Scored {
+    let expressions: Vec<String> = exprs.iter().map(|e| e.to_string()).collect();
+    Scored {
+        expression: expressions.first().cloned().unwrap_or_default(),
+        effect: format!("effect {}", expressions.join(", ")),
+        expressions,
+        kind: EffectKind::LaggedElement,
+        parameter: None,
+        delta_log_evidence: evidence,
+        delta_log_evidence_best: evidence,
+        residual_std_after: 1.0,
+        residual_std_before: 2.0,
+        improvement_pct: 50.0,
+        scored_improvement_pct: 50.0,
+        confirmation: Some(crate::findings::Confirmation {
+            residual_std_before: 2.0,
+            residual_std_after: 1.0,
+            improvement_pct: 50.0,
+            heldout: "blocks".into(),
+            splits_improved: 5,
+            splits: 5,
+            delta_log_evidence_refit: evidence,
+            verification: None,
+        }),
+        unconfirmed: None,
+        train_residual_std_after: 1.0,
+        members: 1,
+        replaces: Vec::new(),
+        refines: None,
+        search: None,
+        searched: crate::candidates::Searched::No,
+        estimate: None,
+        parameter_scored: None,
+        placebo: None,
+        passes: false,
+        fails: Vec::new(),
+        joined: Vec::new(),
+    }
+}

@@ -614,44 +614,12 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::confirm::Confirmation;
     use crate::placebo::Placebo;
-    use tcomp_core::EffectKind;
 
     /// A refitted candidate `expr` whose refit gained `evidence` nats and that beat (or not) its
     /// placebos.
     fn cand(expr: &str, evidence: f64, beats_placebos: bool) -> Scored {
         Scored {
-            expression: expr.into(),
-            expressions: vec![expr.into()],
-            effect: format!("effect {expr}"),
-            kind: EffectKind::LaggedElement,
-            parameter: None,
-            delta_log_evidence: evidence,
-            delta_log_evidence_best: evidence,
-            residual_std_after: 1.0,
-            residual_std_before: 2.0,
-            improvement_pct: 50.0,
-            scored_improvement_pct: 50.0,
-            confirmation: Some(Confirmation {
-                residual_std_before: 2.0,
-                residual_std_after: 1.0,
-                improvement_pct: 50.0,
-                heldout: "blocks".into(),
-                splits_improved: 5,
-                splits: 5,
-                delta_log_evidence_refit: evidence,
-                verification: None,
-            }),
-            unconfirmed: None,
-            train_residual_std_after: 1.0,
-            members: 1,
-            replaces: Vec::new(),
-            refines: None,
-            search: None,
-            searched: crate::candidates::Searched::No,
-            estimate: None,
-            parameter_scored: None,
             placebo: Some(Placebo {
                 rho: 0.5,
                 statistic: if beats_placebos { 9.0 } else { 1.0 },
@@ -662,9 +630,7 @@ mod tests {
                 threshold: 3.0,
                 level: 1.0 / 3.0,
             }),
-            passes: false,
-            fails: Vec::new(),
-            joined: Vec::new(),
+            ..crate::score::refitted(&[expr], evidence)
         }
     }
 

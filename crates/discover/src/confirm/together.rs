@@ -105,47 +105,7 @@ pub(super) fn earning<T>(unions: Vec<(Scored, f64, T)>) -> Option<(Scored, f64, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::findings::Confirmation;
-
-    fn refitted(exprs: &[&str], gain: f64) -> Scored {
-        let expressions: Vec<String> = exprs.iter().map(|e| e.to_string()).collect();
-        Scored {
-            expression: expressions[0].clone(),
-            effect: format!("effect {}", expressions.join(", ")),
-            expressions,
-            kind: tcomp_core::EffectKind::LaggedElement,
-            parameter: None,
-            delta_log_evidence: gain,
-            delta_log_evidence_best: gain,
-            residual_std_after: 1.0,
-            residual_std_before: 2.0,
-            improvement_pct: 50.0,
-            scored_improvement_pct: 50.0,
-            unconfirmed: None,
-            train_residual_std_after: 1.0,
-            members: 1,
-            replaces: Vec::new(),
-            refines: None,
-            search: None,
-            searched: Searched::No,
-            estimate: None,
-            parameter_scored: None,
-            placebo: None,
-            passes: false,
-            fails: Vec::new(),
-            joined: Vec::new(),
-            confirmation: Some(Confirmation {
-                residual_std_before: 2.0,
-                residual_std_after: 1.0,
-                improvement_pct: 50.0,
-                heldout: "blocks".into(),
-                splits_improved: 2,
-                splits: 3,
-                delta_log_evidence_refit: gain,
-                verification: None,
-            }),
-        }
-    }
+    use crate::score::refitted;
 
     /// The leader is joined with the others that add columns of their own, best first; a
     /// refinement, or a candidate sharing the leader's expression, is no partner.
