@@ -31,6 +31,10 @@
 //! After them, the leader is joined with each of the next refitted candidates, and the union that
 //! earns its place over both parts is refitted and judged like any candidate ([`together`]): two
 //! effects missing at once, each standing in for the other in part, are named together.
+//!
+//! After the verdict's legs, when no candidate passes, a candidate that beat its placebos and
+//! failed only the held-out legs is judged again with its blocks refitted in the additive
+//! structure, when that is what the user's own fit of it chooses ([`additive`]).
 
 pub use crate::findings::{Confirmation, Verification};
 use crate::score::{Prepared, Scored};
@@ -44,6 +48,7 @@ use tcomp_train::{Dataset, FitOptions, Roles, metrics};
 /// How the block vote words a candidate it does not confirm (the verdict reads it).
 pub(crate) const VOTE: &str = "lowers the held-out residual in only";
 
+pub mod additive;
 mod blocks;
 pub mod together;
 use blocks::{Split, block_splits, parts_of, training_blocks, verification_split};
@@ -181,7 +186,10 @@ impl<'a> Refits<'a> {
         // of the residual): a feature enters an additive model through a term of its own, and a
         // slow one absorbs a block's extrapolation error by chance, where in a joint model it
         // spoils the Gaussians. The held-out leg's strength here comes from the joint refits;
-        // with the additive ones only the placebo leg stands. Not kept.
+        // with the additive ones only the placebo leg stands. Not kept: only a candidate that
+        // beat its placebos and failed only the held-out legs gets its blocks refitted in the
+        // additive structure, judged against its placebos refitted the same way
+        // ([`additive`]).
         o.settings.bayes.additive = Some(basis == Some(Basis::Additive));
         o.settings.bayes.basis = basis.map(|b| {
             match b {
@@ -476,6 +484,66 @@ pub struct Runs<'a> {
 /// cannot be made passes to the next composition, see [`confirm`]).
 pub const COMPOSED_REFITS: usize = 2;
 
+/// How a refitted candidate is judged on the held-out blocks, against the base's refit there.
+struct Judge<'a> {
+    refits: &'a Refits<'a>,
+    opts: &'a ConfirmOptions,
+    splits: &'a [Split],
+    /// The base feature set's refit on the blocks.
+    base: &'a HeldOutFigures,
+    /// The base's refit's log evidence on the whole training run.
+    base_evidence: f64,
+    /// What the held-out data is, in words.
+    heldout: &'a str,
+}
+
+impl Judge<'_> {
+    /// Gives `c` the confirmation of its refit's `figures` on the blocks and its whole-run
+    /// `evidence`; `how` says in what structure the refit was made when not the joint one.
+    fn judge(&self, c: &mut Scored, figures: HeldOutFigures, evidence: f64, how: Option<&str>) {
+        let r = self.refits;
+        let voting = voting_blocks(r.info, r.roles, r.data, r.gap_s, self.splits, c);
+        let mut splits_improved = figures
+            .each
+            .iter()
+            .zip(&self.base.each)
+            .zip(&voting)
+            .filter(|((a, b), v)| **v && a < b)
+            .count();
+        let mut n = voting.iter().filter(|v| **v).count();
+        let (mut before, mut after, mut heldout) =
+            (self.base.pooled, figures.pooled, self.heldout.to_string());
+        if figures.each.len() > 1
+            && n <= 1
+            && let Some((b, a, k, v, what)) = localized(r, self.opts, self.splits, c)
+        {
+            (before, after, splits_improved, n, heldout) = (b, a, k, v, what);
+        }
+        if let Some(how) = how {
+            heldout = format!("{heldout}, {how}");
+        }
+        let improvement_pct = 100.0 * (1.0 - after / before);
+        c.confirmation = Some(Confirmation {
+            residual_std_before: before,
+            residual_std_after: after,
+            improvement_pct,
+            heldout,
+            splits_improved,
+            splits: n,
+            delta_log_evidence_refit: evidence - self.base_evidence,
+            verification: None,
+        });
+        c.residual_std_before = before;
+        c.residual_std_after = after;
+        c.improvement_pct = improvement_pct;
+        // With blocks, a real effect lowers the residual in most of them; a pooled gain that
+        // one block carries is more likely that block's drift. Only the blocks where the
+        // candidate moves vote (see `voting_blocks`).
+        c.unconfirmed = (figures.each.len() > 1 && 2 * splits_improved <= n)
+            .then(|| format!("{} {splits_improved} of {n} blocks", VOTE));
+    }
+}
+
 /// Refits the leading candidates (their parameters estimated first, on the binned training run of
 /// `prepared`) and replaces their held-out figures with the real ones; every other candidate is
 /// marked unconfirmed. The refits split the run at the gaps `prepared` does.
@@ -604,48 +672,18 @@ pub fn confirm(
             opts.top
         ));
     }
-    // How a refitted candidate is judged on the blocks (its figures and whole-run evidence).
-    let judge = |c: &mut Scored, figures: HeldOutFigures, evidence: f64| {
-        let voting = voting_blocks(info, roles, data, prepared.gap_s, &splits, c);
-        let mut splits_improved = figures
-            .each
-            .iter()
-            .zip(&base_figures.each)
-            .zip(&voting)
-            .filter(|((a, b), v)| **v && a < b)
-            .count();
-        let mut n = voting.iter().filter(|v| **v).count();
-        let (mut before, mut after, mut heldout) = (before, figures.pooled, heldout.clone());
-        if figures.each.len() > 1
-            && n <= 1
-            && let Some((b, a, k, v, what)) = localized(&refits, opts, &splits, c)
-        {
-            (before, after, splits_improved, n, heldout) = (b, a, k, v, what);
-        }
-        let improvement_pct = 100.0 * (1.0 - after / before);
-        c.confirmation = Some(Confirmation {
-            residual_std_before: before,
-            residual_std_after: after,
-            improvement_pct,
-            heldout,
-            splits_improved,
-            splits: n,
-            delta_log_evidence_refit: evidence - base_evidence,
-            verification: None,
-        });
-        c.residual_std_before = before;
-        c.residual_std_after = after;
-        c.improvement_pct = improvement_pct;
-        // With blocks, a real effect lowers the residual in most of them; a pooled gain that
-        // one block carries is more likely that block's drift. Only the blocks where the
-        // candidate moves vote (see `voting_blocks`).
-        c.unconfirmed = (figures.each.len() > 1 && 2 * splits_improved <= n)
-            .then(|| format!("{} {splits_improved} of {n} blocks", VOTE));
+    let judge = Judge {
+        refits: &refits,
+        opts,
+        splits: &splits,
+        base: &base_figures,
+        base_evidence,
+        heldout: &heldout,
     };
     for (i, r) in outcome {
         let Some(c) = cands.get_mut(i) else { continue };
         match r {
-            Ok((figures, evidence)) => judge(c, figures, evidence),
+            Ok((figures, evidence)) => judge.judge(c, figures, evidence, None),
             Err(e) => c.unconfirmed = Some(format!("the refit with it failed: {e}")),
         }
     }
@@ -674,7 +712,7 @@ pub fn confirm(
             } else {
                 0.0
             };
-            judge(&mut u, figures, base_evidence + gain);
+            judge.judge(&mut u, figures, base_evidence + gain, None);
             cands.push(u);
         }
     }
@@ -760,6 +798,7 @@ pub(crate) fn refit_placebos(
     opts: &ConfirmOptions,
     gap_s: Option<f64>,
     c: &Scored,
+    pinned: Option<Basis>,
 ) -> Option<crate::placebo::RefitPlacebos> {
     let k = c.confirmation.as_ref()?;
     let first = c.placebo.as_ref()?;
@@ -808,9 +847,14 @@ pub(crate) fn refit_placebos(
     let (splits, _) = block_splits(&blocks);
     let refits = Refits::new(info, roles, &extended, gap_s);
     // Each placebo is judged in the basis the candidate's whole-run refit chose, as the candidate
-    // was (one refit, where a choice per placebo would cost one each).
-    let on_run = Refits::new(info, roles, data, gap_s);
-    let (_, basis) = on_run.whole(&on_run.features(Some(c)));
+    // was (one refit, where a choice per placebo would cost one each), unless `pinned`.
+    let basis = match pinned {
+        Some(b) => Some(b),
+        None => {
+            let on_run = Refits::new(info, roles, data, gap_s);
+            on_run.whole(&on_run.features(Some(c))).1
+        }
+    };
     let before = k.residual_std_before;
     let placebos_pct: Vec<f64> = sets
         .par_iter()

@@ -12,7 +12,7 @@
 //! expression's column computed once per run, `column_cache`),
 //! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`confirm`] (the
 //! leading candidates refitted by the trainer; two effects that explain the run only together,
-//! [`confirm::together`]), [`placebo`] (each against its own columns shifted
+//! [`confirm::together`]; a second look in the additive structure, [`confirm::additive`]), [`placebo`] (each against its own columns shifted
 //! in time, under AR(1) noise; what both found, `findings`), [`verdict`] (the stated criterion: a missing effect, "cannot tell"
 //! or none). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
 //! in the tool (`host-tools/src/render/`, `host-tools/src/demo/`): this crate analyses, it does not
@@ -296,8 +296,15 @@ pub fn diagnose(
     if !retest.is_empty() {
         for &i in &retest {
             let Some(c) = cands.get(i) else { continue };
-            let refit =
-                confirm::refit_placebos(&info, &roles, runs, &opts.confirm, prepared.gap_s, c);
+            let refit = confirm::refit_placebos(
+                &info,
+                &roles,
+                runs,
+                &opts.confirm,
+                prepared.gap_s,
+                c,
+                None,
+            );
             if let Some(p) = cands.get_mut(i).and_then(|c| c.placebo.as_mut()) {
                 p.refit = refit;
             }
@@ -321,6 +328,22 @@ pub fn diagnose(
                 r.threshold_pct = threshold;
             }
         }
+        opts.criterion.apply(refit_before.noise_floor, &mut cands);
+    }
+    // A second look, in the additive structure the user's fit chooses, at the leading candidates
+    // that beat their placebos and fail only the held-out legs, when none passes (see
+    // `confirm::additive`).
+    if !cands.first().is_some_and(|c| c.passes)
+        && confirm::additive::second_look(
+            &info,
+            &roles,
+            runs,
+            &opts.confirm,
+            &prepared,
+            &mut cands,
+            |c| opts.criterion.second_look(c),
+        )?
+    {
         opts.criterion.apply(refit_before.noise_floor, &mut cands);
     }
     // The verification run, reported for the candidates the verdict names (see `confirm::verify`).
