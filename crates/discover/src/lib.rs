@@ -12,9 +12,9 @@
 //! expression's column computed once per run, `column_cache`),
 //! (the grouped-prior evidence arithmetic under it is `tcomp_train::evidence`), [`confirm`] (the
 //! leading candidates refitted by the trainer; two effects that explain the run only together,
-//! [`confirm::together`]; a second look in the additive structure, [`confirm::additive`]), [`placebo`] (each against its own columns shifted
-//! in time, under AR(1) noise; what both found, `findings`), [`verdict`] (the stated criterion: a missing effect, "cannot tell"
-//! or none). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
+//! [`confirm::together`]; a second look in the additive structure, [`confirm::additive`]),
+//! [`placebo`] (each against its own columns shifted in time, under AR(1) noise; what both found,
+//! `findings`), [`verdict`] (the stated criterion: a missing effect, "cannot tell" or none). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
 //! in the tool (`host-tools/src/render/`, `host-tools/src/demo/`): this crate analyses, it does not
 //! print, and it needs no simulator.
 //!
