@@ -119,13 +119,7 @@ pub(crate) fn second_look(
         let Ok(figures) = heldout_std(&refits, &splits, &features, Some(Basis::Additive)) else {
             continue;
         };
-        let joint = (
-            c.confirmation.clone(),
-            c.residual_std_before,
-            c.residual_std_after,
-            c.improvement_pct,
-            c.unconfirmed.clone(),
-        );
+        let joint = c.clone();
         // The joint refit's evidence still ranks it (the additive structure's is another
         // yardstick).
         judge.judge(c, figures, base_evidence + gain, Some(HOW));
@@ -145,13 +139,7 @@ pub(crate) fn second_look(
         if beats {
             changed = true;
         } else {
-            (
-                c.confirmation,
-                c.residual_std_before,
-                c.residual_std_after,
-                c.improvement_pct,
-                c.unconfirmed,
-            ) = joint;
+            *c = joint;
         }
     }
     Ok(changed)
