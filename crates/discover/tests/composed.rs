@@ -9,7 +9,9 @@
 //! when that stays above the floor. Every figure is printed beside its limit.
 //!
 //! `cargo test --release -p tcomp-discover --test composed -- --nocapture --test-threads 1`
-//! (`DUMP=1` prints every candidate of each run, its Δ log evidence and expressions).
+//! (`DUMP=1` prints every candidate of each run, its Δ log evidence and expressions;
+//! `ROUNDS=3` also runs the rounds a user runs and prints the final model's verification
+//! residual; `SEED_OFFSET=1000` runs every scenario on fresh runs, for a held-out figure).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic, missing_docs)]
 
 mod support;
@@ -62,7 +64,7 @@ fn run_scenario(s: &Scenario) -> (bool, f64, f64, String) {
     let mut case = base_case(
         presets::with_effects(s.sensor, s.effects)
             .unwrap()
-            .with_seed(s.seed),
+            .with_seed(s.seed + seed_offset()),
         &[],
     );
     if s.idle {
@@ -98,6 +100,32 @@ fn run_scenario(s: &Scenario) -> (bool, f64, f64, String) {
     told.push(s.hidden.to_string());
     let told = after_ratio(&case, &told);
     let limit = limit_ratio(&case);
+    // `ROUNDS=n`: the rounds a user runs (`tcomp diagnose --rounds n`), each confirmed effect
+    // added and the model refitted, and the final model's verification residual beside the limit.
+    if let Some(n) = std::env::var("ROUNDS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        let fitted = fit(&case, &case.base);
+        let bytes = fitted.model.to_bytes().unwrap();
+        let model = tcomp_train::blob_io::decode("m.tcm".as_ref(), &bytes).unwrap();
+        let r = tcomp_discover::diagnose_rounds(
+            &model,
+            &case.sim.train,
+            Some(&case.sim.verify),
+            &options(&case),
+            n,
+        )
+        .unwrap();
+        let last = after_ratio(&case, &r.final_features);
+        println!(
+            "ROUNDS {}: final {:?} {last:.2}× (limit {limit:.2}×; within 1.2× of it: {}); {}",
+            s.name,
+            r.final_features,
+            last <= 1.2 * limit.max(1.0),
+            r.stopped
+        );
+    }
     let text = format!(
         "{}: hidden `{}`\n{}  after {features:?}: {after:.2}× the floor (limit {limit:.2}×; \
          the trainer told the truth {told:.2}×)",

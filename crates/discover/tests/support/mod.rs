@@ -304,6 +304,15 @@ pub fn check_parameter(o: &Outcome, truth: f64, tol: f64) {
     );
 }
 
+/// `SEED_OFFSET=k`: every case on fresh runs, its seed moved by `k` — a held-out measurement of
+/// cases whose assertions were set on their listed seeds (expect some to fail).
+pub fn seed_offset() -> u64 {
+    std::env::var("SEED_OFFSET")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0)
+}
+
 pub fn base_case(preset: tcomp_sim::Preset, hidden: &[EffectKind]) -> Case {
     let sim = simulated(&preset).unwrap();
     let truth = &sim.train_truth;
