@@ -331,19 +331,22 @@ pub fn diagnose(
         opts.criterion.apply(refit_before.noise_floor, &mut cands);
     }
     // A second look, in the additive structure the user's fit chooses, at the leading candidates
-    // that beat their placebos and fail only the held-out legs, when none passes (see
-    // `confirm::additive`).
-    if !cands.first().is_some_and(|c| c.passes)
-        && confirm::additive::second_look(
-            &info,
-            &roles,
-            runs,
-            &opts.confirm,
-            &prepared,
-            &mut cands,
-            |c| opts.criterion.second_look(c),
-        )?
-    {
+    // that beat their placebos and fail only the held-out legs, when none passes or when they
+    // outweigh the one that does (see `confirm::additive`).
+    let passing = cands.first().filter(|c| c.passes).map(|c| {
+        c.confirmation
+            .as_ref()
+            .map_or(f64::INFINITY, |k| k.delta_log_evidence_refit)
+    });
+    if confirm::additive::second_look(
+        &info,
+        &roles,
+        runs,
+        &opts.confirm,
+        &prepared,
+        &mut cands,
+        |c| opts.criterion.second_look(c) && confirm::additive::outweighs(c, passing),
+    )? {
         opts.criterion.apply(refit_before.noise_floor, &mut cands);
     }
     // The verification run, reported for the candidates the verdict names (see `confirm::verify`).

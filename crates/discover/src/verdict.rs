@@ -492,7 +492,7 @@ fn fails_only_heldout(c: &Scored) -> bool {
         && !c.fails.is_empty()
         && c.refines.is_none()
         && c.joined.is_empty()
-        && !matches!(c.searched, crate::candidates::Searched::Bank(_))
+        && (!matches!(c.searched, crate::candidates::Searched::Bank(_)) || c.expressions.len() == 1)
         && c.confirmation.is_some()
         && c.placebo
             .as_ref()
@@ -723,9 +723,12 @@ mod tests {
             v.remove(0)
         };
         assert!(passing.passes && !crit.second_look(&passing));
-        // A bank of lags read off the data enters the additive structure as a term per lag.
+        // A bank's reading of several lags enters the additive structure as a term per lag; a
+        // reading of one lag is one term, as any other candidate.
         let mut bank = cand("lag(T, 120)", 276.0, true);
         bank.searched = crate::candidates::Searched::Bank(vec!["lag(T, 120)".into()]);
+        assert!(crit.second_look(&judged(bank.clone())));
+        bank.expressions.push("lag(T, 3000)".into());
         assert!(!crit.second_look(&judged(bank)));
     }
 

@@ -13,9 +13,11 @@
 //!
 //! How: only a candidate that clears the evidence leg (by the scoring's evidence and by the
 //! trainer's real refit's), beats its placebos on the evidence (their first stage), is not a bank
-//! of lags read off the data (a term per lag), and fails only the held-out legs gets it, and only
-//! when no candidate passes (a second look then cannot displace a named effect), at most [`LOOKS`]
-//! per diagnosis (`Criterion::second_look` in [`crate::verdict`]). When the trainer's whole-run fit of
+//! of several lags read off the data (a term per lag; a bank that reads one lag is one term), and
+//! fails only the held-out legs gets it — when no candidate passes, or when its refit evidence
+//! outweighs the candidate that passes by [`OUTWEIGHS_NATS`] (a near tie cannot displace a named
+//! effect) — at most [`LOOKS`] per diagnosis (`Criterion::second_look` in [`crate::verdict`]).
+//! When the trainer's whole-run fit of
 //! its features with the additive structure offered chooses that structure, its blocks are
 //! refitted with the structure pinned and judged as before — the same legs, the same vote, the
 //! same noise floor — against the base's blocks in whichever of its own structure and the
@@ -44,6 +46,21 @@ use tcomp_train::method::Basis;
 
 /// Candidates given the second look at most, in the verdict's order.
 pub const LOOKS: usize = 2;
+
+/// Nats of the trainer's refit evidence by which a candidate must outweigh the one that passes to
+/// be looked at again: "very strong" on Kass and Raftery's scale (`2 ln B > 10`), so that a
+/// second look goes only to a hypothesis the run prefers decisively, never to a near tie.
+pub const OUTWEIGHS_NATS: f64 = 5.0;
+
+/// Whether `c` may have a second look beside the refit evidence `passing` of the candidate that
+/// passes (`None`: none passes, and any may).
+pub(crate) fn outweighs(c: &Scored, passing: Option<f64>) -> bool {
+    passing.is_none_or(|e0| {
+        c.confirmation
+            .as_ref()
+            .is_some_and(|k| k.delta_log_evidence_refit > e0 + OUTWEIGHS_NATS)
+    })
+}
 
 /// How the held-out figures of a candidate so judged are described.
 const HOW: &str = "refitted in the additive structure the user's fit of it chooses";
@@ -143,4 +160,24 @@ pub(crate) fn second_look(
         }
     }
     Ok(changed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::score::refitted;
+
+    #[test]
+    fn a_look_beside_a_named_effect_needs_decisive_evidence() {
+        let c = refitted(&["lag(supply_v, 250)"], 100.0);
+        assert!(outweighs(&c, None), "none passes: any may be looked at");
+        assert!(outweighs(&c, Some(100.0 - OUTWEIGHS_NATS - 0.1)));
+        assert!(
+            !outweighs(&c, Some(100.0 - OUTWEIGHS_NATS + 0.1)),
+            "a near tie"
+        );
+        let mut unrefitted = c.clone();
+        unrefitted.confirmation = None;
+        assert!(!outweighs(&unrefitted, Some(0.0)));
+    }
 }
