@@ -97,6 +97,7 @@
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
+use crate::param::significant;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::collections::{HashMap, HashSet};
@@ -163,17 +164,6 @@ impl Range {
             _ => significant(v, 2),
         }
     }
-}
-
-/// `v` to `n` significant figures.
-fn significant(v: f64, n: usize) -> f64 {
-    if !v.is_finite() || v == 0.0 {
-        return v;
-    }
-    // Through the decimal text, so that the value prints as typed (26.4, not 26.400000000000002).
-    format!("{:.*e}", n.saturating_sub(1), v)
-        .parse()
-        .unwrap_or(v)
 }
 
 /// An input the compositions start from.

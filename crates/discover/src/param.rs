@@ -84,11 +84,19 @@ pub struct Estimate {
 
 /// `v` rounded to two significant figures.
 pub fn two_significant(v: f64) -> f64 {
+    significant(v, 2)
+}
+
+/// `v` to `n` significant figures, through the decimal text, so that the value prints as typed
+/// (`0.051`, not the `0.051000000000000004` that scaling by a power of ten leaves: measured, a
+/// heating/cooling hysteresis named as `hyst(rate(t_coil_c), 0.051000000000000004)`).
+pub(crate) fn significant(v: f64, n: usize) -> f64 {
     if !v.is_finite() || v == 0.0 {
         return v;
     }
-    let scale = 10f64.powf(v.abs().log10().floor() - 1.0);
-    (v / scale).round() * scale
+    format!("{:.*e}", n.saturating_sub(1), v)
+        .parse()
+        .unwrap_or(v)
 }
 
 /// Golden-section maximisation of `f` over `[a, b]` with `steps` evaluations after the first
@@ -257,6 +265,14 @@ pub fn estimate(
 mod tests {
     use super::*;
     use crate::families::Template;
+
+    #[test]
+    fn values_are_rounded_as_typed() {
+        assert_eq!(two_significant(0.051_234).to_string(), "0.051");
+        assert_eq!(two_significant(1_234.0).to_string(), "1200");
+        assert_eq!(two_significant(-0.000_717_9).to_string(), "-0.00072");
+        assert_eq!(significant(26.43, 3).to_string(), "26.4");
+    }
 
     fn lag_search() -> Search {
         Search {
