@@ -32,9 +32,10 @@
 //! earns its place over both parts is refitted and judged like any candidate ([`together`]): two
 //! effects missing at once, each standing in for the other in part, are named together.
 //!
-//! After the verdict's legs, when no candidate passes, a candidate that beat its placebos and
-//! failed only the held-out legs is judged again with its blocks refitted in the additive
-//! structure, when that is what the user's own fit of it chooses ([`additive`]).
+//! After the verdict's legs, when no candidate passes or when it outweighs the one that does, a
+//! candidate that beat its placebos and failed only the held-out legs is judged again with its
+//! blocks refitted in the additive structure, when that is what the user's own fit of it chooses
+//! ([`additive`]).
 
 pub use crate::findings::{Confirmation, Verification};
 use crate::score::{Prepared, Scored};

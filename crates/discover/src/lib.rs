@@ -14,9 +14,10 @@
 //! leading candidates refitted by the trainer; two effects that explain the run only together,
 //! [`confirm::together`]; a second look in the additive structure, [`confirm::additive`]),
 //! [`placebo`] (each against its own columns shifted in time, under AR(1) noise; what both found,
-//! `findings`), [`verdict`] (the stated criterion: a missing effect, "cannot tell" or none). The rendering of a diagnosis (text tables, the HTML report) and the built-in demo live
-//! in the tool (`host-tools/src/render/`, `host-tools/src/demo/`): this crate analyses, it does not
-//! print, and it needs no simulator.
+//! `findings`), [`verdict`] (the stated criterion: a missing effect, "cannot tell" or none). The
+//! rendering of a diagnosis (text tables, the HTML report) and the built-in demo live in the tool
+//! (`host-tools/src/render/`, `host-tools/src/demo/`): this crate analyses, it does not print,
+//! and it needs no simulator.
 //!
 //! ```no_run
 //! use tcomp_discover::{DiagnoseOptions, diagnose};

@@ -35,7 +35,9 @@
 //!
 //! The held-out figures of legs 1 (its held-out path), 2 and 3 are those of a real refit by the
 //! trainer ([`crate::confirm`]): only the few candidates so refitted can be named, so a verdict never
-//! rests on the scoring's fixed-center estimate alone. When none passes, a candidate that fails
+//! rests on the scoring's fixed-center estimate alone. When none passes (or beside one that
+//! passes, when its refit evidence outweighs that one's by
+//! [`crate::confirm::additive::OUTWEIGHS_NATS`]), a candidate that fails
 //! only legs 2 and 3 or the blocks' vote, with the real refit's evidence clearing leg 1 too and
 //! its evidence above its placebos, is judged once more with its blocks refitted in the additive
 //! structure its user's fit chooses, and keeps those figures only if they beat its placebos
