@@ -431,6 +431,28 @@ impl Prepared {
         &self.time
     }
 
+    /// The first sample of each stretch of the training run (a gap restarts the stateful
+    /// functions).
+    pub(crate) fn stretch_starts(&self) -> &[usize] {
+        &self.starts
+    }
+
+    /// The training columns of `exprs` on every sample, not binned.
+    pub(crate) fn per_sample(&self, exprs: &[String]) -> Result<Vec<Vec<f64>>> {
+        let mut out = Vec::with_capacity(exprs.len());
+        let time = self.data.time(&self.time)?;
+        for chunk in exprs.chunks(tcomp_train::features::F) {
+            let spec = tcomp_train::features::FeatureSpec {
+                signals: self.signals.clone(),
+                features: chunk.to_vec(),
+            };
+            let program = spec.program()?;
+            let rows = tcomp_train::features::compute(&program, &self.data, time, &self.starts)?;
+            out.extend((0..chunk.len()).map(|k| rows.iter().map(|r| f64::from(r[k])).collect()));
+        }
+        Ok(out)
+    }
+
     /// The binned training columns of `exprs`, as they are (not standardised).
     pub(crate) fn binned(&self, exprs: &[String]) -> Result<Columns> {
         let compute = |e: &[String]| {

@@ -60,6 +60,12 @@
 //! seeds, and a lag hidden in a gappy log was named as a kink of the lag). A temperature's rate
 //! is not a temperature, though: memoryless functions of a rate are composed (`abs(rate(T))`, a
 //! bias the same on heating and cooling, was pruned as a curve shape and missed, 7.2× the floor).
+//! Pruned by the run: a shape whose saturation or switch the training run barely enters (a clamp's
+//! band, a relay's state held on fewer than 5 % of the samples: [`crate::regimes`]) is not
+//! identified by it, and has no gain on every row — the re-scoring and the refinement pass it by
+//! (measured: a clamp of a rate to a band two thousandths wide tied a mode hop and made "cannot
+//! tell"; a relay on the supply was lost behind such clamps, 6.77× the floor, now named exactly,
+//! 1.21×, on fresh runs).
 //! Pruned by evidence: only the [`BEAM`] best depth-one shapes are composed again — and beside
 //! them the [`PER_OPERAND`] best over each non-thermal input, so that one input's shapes (or an
 //! idle column's) cannot fill the beam alone (measured: `lag(abs(supply_v − 28.1), 900)` was
@@ -291,6 +297,9 @@ struct Behaviour {
     /// `f(a·x + c) = a·f(x) + f(c)`: a linear time-invariant filter (a lag, a rate), which
     /// commutes with any other: `lag(rate(x))` and `rate(lag(x))` are one shape.
     linear: bool,
+    /// The output holds a level while the operand moves (a clamp's bound, a relay's state): the
+    /// run must visit each of its regimes ([`crate::regimes`]).
+    saturates: bool,
 }
 
 /// Every one-operand function of the language with its behaviour, measured once per process.
@@ -380,6 +389,7 @@ fn behaviour(f: &Function) -> Option<Behaviour> {
         shift_matters_alone: alone > 1e-4,
         keeps_level: keeps,
         linear: scales && hi - lo <= tol,
+        saturates: crate::regimes::saturates(&fx, &x),
     })
 }
 
@@ -422,6 +432,9 @@ struct Screen<'a> {
     /// rounded to the figures they print with, so a grid point, a refinement's probe and another
     /// shape's inner start often spell the same expression (the same column, the same gain).
     coarse_seen: Mutex<HashMap<String, f64>>,
+    /// Whether the run visits every regime of an expression's calls ([`crate::regimes`]), by its
+    /// text.
+    regimes_seen: Mutex<HashMap<String, bool>>,
 }
 
 impl<'a> Screen<'a> {
@@ -444,12 +457,16 @@ impl<'a> Screen<'a> {
             cov,
             beta,
             coarse_seen: Mutex::new(HashMap::new()),
+            regimes_seen: Mutex::new(HashMap::new()),
         })
     }
 
     /// The gain of `e` computed on every row (nats; −∞ when its column cannot be computed or is
     /// constant).
     fn gain(&self, e: &Expr) -> f64 {
+        if !self.regimes_visited(e) {
+            return f64::NEG_INFINITY;
+        }
         let Ok(cols) = self.p.binned(&[e.to_string()]) else {
             return f64::NEG_INFINITY;
         };
@@ -474,6 +491,42 @@ impl<'a> Screen<'a> {
             m.insert(text, g);
         }
         g
+    }
+
+    /// Whether the training run's samples visit every regime of `e`'s saturating or switching
+    /// calls ([`crate::regimes`]): a shape that fails has no gain on every row, so that the
+    /// re-scoring and the refinement pass it by. (The coarse screen does not judge it: a bin's
+    /// mean input blurs a relay on a fast input's rate out of one of its states.)
+    fn regimes_visited(&self, e: &Expr) -> bool {
+        let text = e.to_string();
+        if let Some(v) = self
+            .regimes_seen
+            .lock()
+            .ok()
+            .and_then(|m| m.get(&text).copied())
+        {
+            return v;
+        }
+        let calls = crate::regimes::calls(e, &|name| {
+            behaviours()
+                .iter()
+                .any(|(f, b)| f.name == name && b.saturates)
+        });
+        let features: Vec<String> = calls
+            .iter()
+            .flat_map(|c| [c.call.to_string(), c.operand.to_string()])
+            .collect();
+        let starts = self.p.stretch_starts();
+        let v = calls.is_empty()
+            || self.p.per_sample(&features).map_or(true, |cols| {
+                cols.chunks(2)
+                    .zip(&calls)
+                    .all(|(pair, c)| c.visited(&pair[0], &pair[1], starts))
+            });
+        if let Ok(mut m) = self.regimes_seen.lock() {
+            m.insert(text, v);
+        }
+        v
     }
 
     /// [`Screen::gain_coarse`] computed.
@@ -1401,6 +1454,11 @@ mod tests {
         assert!(b("abs").shift_matters);
         // Linear time-invariant: the filters, not the memoryless or switching functions.
         assert!(b("lag").linear && b("rate").linear);
+        // Saturating or switching: the relay and the clamp, not the filters or the curves.
+        for f in ["lag", "rate", "sq", "abs"] {
+            assert!(!b(f).saturates, "{f}");
+        }
+        assert!(b("hyst").saturates && b("clamp").saturates);
         for f in ["sq", "abs", "hyst", "clamp"] {
             assert!(!b(f).linear, "{f}");
         }

@@ -43,6 +43,7 @@ mod hypothesis;
 pub mod joint;
 pub mod param;
 pub mod placebo;
+pub mod regimes;
 pub mod rounds;
 pub mod score;
 pub mod segments;

@@ -186,13 +186,14 @@ fn a_mode_hop_seen_through_a_lag_is_told_as_a_tie() {
     assert!(text.contains("ramps at a second rate"), "{text}");
 }
 
-/// A composition whose refit cannot be made passes its refit slot on: here two clamps of a rate
-/// to a band the rate crosses inside one block only lead the search, and the refit holding that
-/// block out fails on their constant column; the product of a relay on the supply with T, third
-/// by evidence, is refitted in their place (it fails on the held-out blocks, which the scenario
-/// `a_relay_on_an_input_scaled_by_temperature` keeps as a miss).
+/// A composed shape whose regime the run barely visits is no candidate: here two clamps of a rate
+/// to a band the rate crosses inside one block only (`clamp(rate(supply_v, 4000), 0.00666,
+/// 0.00669)`) led the search, and the trainer found their columns constant — the refit failed and
+/// passed its slot on. Now no candidate's refit fails, and the product of a relay on the supply
+/// with T, which they pushed to third, is refitted (it fails on the held-out blocks, which the
+/// scenario `a_relay_on_an_input_scaled_by_temperature` keeps as a miss).
 #[test]
-fn a_refit_that_cannot_be_made_passes_its_slot_on() {
+fn a_shape_the_run_barely_visits_takes_no_refit_slot() {
     let (_, _, _, text) = run_scenario(&Scenario {
         name: "relay on an input × temperature, refitted",
         sensor: SensorKind::Qma,
@@ -206,11 +207,12 @@ fn a_refit_that_cannot_be_made_passes_its_slot_on() {
         .lines()
         .filter(|l| l.contains("the refit with it failed"))
         .count();
+    // Its row in the candidate table (the verdict may name it as the closest, too).
     let product = text
         .lines()
-        .find(|l| l.contains("× a relay on supply_v"))
+        .find(|l| l.starts_with("  ") && l.contains("× a relay on supply_v"))
         .unwrap_or_default();
-    assert!(failed >= 1, "{text}");
+    assert_eq!(failed, 0, "{text}");
     assert!(!product.is_empty(), "{text}");
     assert!(!product.contains("not among the"), "{text}");
     let refit = product
