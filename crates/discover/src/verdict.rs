@@ -29,9 +29,12 @@
 //! by less than [`INDISTINCT_NATS`]; when a second candidate is no worse than the first on the
 //! refit's evidence and on the pooled held-out figure and fails only the blocks' vote (above its
 //! placebos), or only its placebos while reading none of the first's inputs (the first then rests
-//! on a leg the better explanation failed narrowly); or when the best candidate
-//! clears every leg but the placebos (the run cannot tell it from a drift). It is never a missing
-//! effect: `--rounds` stops there.
+//! on a leg the better explanation failed narrowly); when the best candidate
+//! clears every leg but the placebos (the run cannot tell it from a drift); or when none passes
+//! and one clears every leg but the held-out ones, beating its placebos (the run holds a structure
+//! a drift would not explain, which the fit does not carry to the blocks it did not see: an effect
+//! the fit extrapolates badly, or an over-fit). It is never a missing effect: `--rounds` stops
+//! there.
 //!
 //! The held-out figures of legs 1 (its held-out path), 2 and 3 are those of a real refit by the
 //! trainer ([`crate::confirm`]): only the few candidates so refitted can be named, so a verdict never
@@ -515,6 +518,9 @@ enum Named<'a> {
     Rivals(&'a Scored, &'a Scored, Rival),
     /// One that clears every leg but its placebos, before any that passes.
     Drift(&'a Scored, &'a crate::placebo::Placebo),
+    /// None passes, and one clears every leg but the held-out ones: it explains the training run
+    /// beyond its placebos, and the fits with it predict the held-out blocks no better.
+    Unpredictive(&'a Scored, &'a crate::placebo::Placebo),
     /// The first, which passes.
     First(&'a Scored),
     /// None passes: the closest, named without its figures.
@@ -541,6 +547,19 @@ fn named(cands: &[Scored]) -> Named<'_> {
     {
         return Named::Drift(c, p);
     }
+    // The run holds an explanation its placebos do not, which the fit does not carry to the
+    // blocks it did not see: "nothing is missing" would not be the truth, and neither would the
+    // effect (measured: the truth's kink in a second input, +486 nats and beating its placebos,
+    // was "no significant missing effect" at 8.2× the floor).
+    if !cands.first().is_some_and(|c| c.passes)
+        && let Some(c) = cands
+            .iter()
+            .take_while(|c| !c.passes)
+            .find(|c| fails_only_heldout(c))
+        && let Some(p) = &c.placebo
+    {
+        return Named::Unpredictive(c, p);
+    }
     match cands.first() {
         Some(c) if c.passes => Named::First(c),
         Some(c) => Named::Closest(c),
@@ -554,7 +573,9 @@ pub(crate) fn reported(cands: &[Scored]) -> Vec<usize> {
     let of = |c: &Scored| cands.iter().position(|k| std::ptr::eq(k, c));
     match named(cands) {
         Named::Rivals(a, b, _) => [of(a), of(b)].into_iter().flatten().collect(),
-        Named::Drift(c, _) | Named::First(c) => of(c).into_iter().collect(),
+        Named::Drift(c, _) | Named::Unpredictive(c, _) | Named::First(c) => {
+            of(c).into_iter().collect()
+        }
         Named::Closest(_) | Named::Nothing => Vec::new(),
     }
 }
@@ -618,6 +639,23 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
                 estimate_text(c),
                 p.statistic,
                 p.threshold
+            ),
+        ),
+        Named::Unpredictive(c, p) => (
+            Verdict::CannotTell,
+            format!(
+                "cannot tell: {} — {} explains the training run beyond its own columns shifted in \
+                 time (Δ log evidence under AR(1) noise {:.1} > {:.1}, the best of its placebos), \
+                 but the fits with it predict the training run's held-out blocks no better ({}; {}): \
+                 an effect the fit carries badly to conditions it did not see, or an over-fit; a \
+                 second run over the same temperatures and inputs would separate them (an effect \
+                 repeats and is then seen in training, an over-fit does not)",
+                c.effect,
+                instruction(c),
+                p.statistic,
+                p.threshold,
+                heldout_text(c),
+                c.fails.join("; ")
             ),
         ),
         Named::First(c) if c.refines.is_none() => (
@@ -732,6 +770,28 @@ mod tests {
         assert!(crit.second_look(&judged(bank.clone())));
         bank.expressions.push("lag(T, 3000)".into());
         assert!(!crit.second_look(&judged(bank)));
+    }
+
+    /// None passes, and one beats its placebos with a strong refit but predicts the held-out
+    /// blocks worse: "cannot tell", naming it and saying why — not "nothing is missing". Below
+    /// its placebos as well, it is "none".
+    #[test]
+    fn a_structure_the_fit_does_not_carry_to_held_out_blocks_is_cannot_tell() {
+        let held_out_only = |beats: bool| {
+            let mut c = cand("abs(heater_v - 12.1)", 276.0, beats);
+            c.improvement_pct = -40.0;
+            c.residual_std_after = 2.8;
+            c.unconfirmed = Some(format!("{VOTE} 0 of 5 blocks"));
+            c
+        };
+        let (v, t) = decided(vec![held_out_only(true)]);
+        assert_eq!(v, Verdict::CannotTell, "{t}");
+        assert!(
+            t.contains("abs(heater_v - 12.1)") && t.contains("over-fit"),
+            "{t}"
+        );
+        let (v, t) = decided(vec![held_out_only(false)]);
+        assert_eq!(v, Verdict::None, "{t}");
     }
 
     /// Two passing candidates within a nat: both named, with the run that would separate them.
