@@ -64,8 +64,8 @@
 //! band, a relay's state held on fewer than 5 % of the samples: [`crate::regimes`]) is not
 //! identified by it, and has no gain on every row — the re-scoring and the refinement pass it by
 //! (measured: a clamp of a rate to a band two thousandths wide tied a mode hop and made "cannot
-//! tell"; a relay on the supply was lost behind such clamps, 6.77× the floor, now named exactly,
-//! 1.21×, on fresh runs).
+//! tell"; on fresh negative controls, a clamp of an idle heater's rate to a band 0.0002 wide was
+//! named, 1 of 100, and is no longer).
 //! Pruned by evidence: only the [`BEAM`] best depth-one shapes are composed again — and beside
 //! them the [`PER_OPERAND`] best over each non-thermal input, so that one input's shapes (or an
 //! idle column's) cannot fill the beam alone (measured: `lag(abs(supply_v − 28.1), 900)` was
