@@ -6,7 +6,9 @@
 //! reasons there); preparing it is a job of its own, done once per diagnosis.
 
 use crate::column_cache::ColumnCache;
-use crate::design::{Columns, Transform, compute_binned, error_of, floor_estimate, hcat, mean_sd};
+use crate::design::{
+    Columns, Transform, compute_binned, compute_per_sample, error_of, floor_estimate, hcat, mean_sd,
+};
 use crate::error::{DiscoverError, Result};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -440,15 +442,14 @@ impl Prepared {
     /// The training columns of `exprs` on every sample, not binned.
     pub(crate) fn per_sample(&self, exprs: &[String]) -> Result<Vec<Vec<f64>>> {
         let mut out = Vec::with_capacity(exprs.len());
-        let time = self.data.time(&self.time)?;
         for chunk in exprs.chunks(tcomp_train::features::F) {
-            let spec = tcomp_train::features::FeatureSpec {
-                signals: self.signals.clone(),
-                features: chunk.to_vec(),
-            };
-            let program = spec.program()?;
-            let rows = tcomp_train::features::compute(&program, &self.data, time, &self.starts)?;
-            out.extend((0..chunk.len()).map(|k| rows.iter().map(|r| f64::from(r[k])).collect()));
+            out.extend(compute_per_sample(
+                &self.signals,
+                chunk,
+                &self.data,
+                &self.time,
+                &self.starts,
+            )?);
         }
         Ok(out)
     }

@@ -23,6 +23,20 @@ pub(crate) fn compute_binned(
     starts: &[usize],
     b: &[(usize, usize)],
 ) -> Result<Vec<Vec<f64>>> {
+    Ok(compute_per_sample(signals, exprs, data, time_col, starts)?
+        .iter()
+        .map(|c| bin_mean(c, b))
+        .collect())
+}
+
+/// The values of the features `exprs` (with `signals`) over `data`, one per sample.
+pub(crate) fn compute_per_sample(
+    signals: &[String],
+    exprs: &[String],
+    data: &Dataset,
+    time_col: &str,
+    starts: &[usize],
+) -> Result<Vec<Vec<f64>>> {
     let spec = FeatureSpec {
         signals: signals.to_vec(),
         features: exprs.to_vec(),
@@ -32,10 +46,7 @@ pub(crate) fn compute_binned(
     let time = data.time(time_col)?;
     let rows = features::compute(&program, data, time, starts)?;
     Ok((0..nf)
-        .map(|k| {
-            let c: Vec<f64> = rows.iter().map(|r| f64::from(r[k])).collect();
-            bin_mean(&c, b)
-        })
+        .map(|k| rows.iter().map(|r| f64::from(r[k])).collect())
         .collect())
 }
 
