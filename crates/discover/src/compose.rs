@@ -76,7 +76,8 @@
 //! [`EARN_NATS`]: another explanation of the same residual, for the refits and the verdict to
 //! weigh (measured: a relay on a lagging element tied a wider relay on the thermometer, 111.1
 //! against 110.9 nats, and the wider relay was named, 1.85× the floor where the truth reaches
-//! 0.91×; now "cannot tell", naming both). Shapes whose training columns are one
+//! 0.91×; handed on, the two are weighed by the verdict, whose structure prior names the
+//! simpler where the refits tie: [`crate::description`]). Shapes whose training columns are one
 //! ([`simplest`]: the same column, the same stateful functions over the same inputs) are one
 //! name, the simplest. Only the [`PROPOSED`] best shapes that no listed family already covers are
 //! handed on. They are then
@@ -92,8 +93,8 @@
 //! relay on a supply voltage, a second input or a gradient away from zero, a saturating supply, a
 //! lagged relay and a relay on a lagged supply are named with their parameters exactly; the rate of a lagged input as a
 //! lagged rate, the size of a temperature's rate or a supply's, the rate of a saturating supply, a
-//! lagged V-shaped supply, a lagged parabola in the supply, a kink in a lagged supply; a mode hop of a lagging element is "cannot tell" between itself and a wider
-//! relay, as the run cannot tell them. Not yet: an input times a rate, a lagged rate (named as
+//! lagged V-shaped supply, a lagged parabola in the supply, a kink in a lagged supply; a mode hop of a lagging element is named as the wider relay on
+//! the thermometer, which the run cannot tell from it and which is one function simpler. Not yet: an input times a rate, a lagged rate (named as
 //! the lag it equals with the model's own `T`), a narrow mode hop, a saturating gradient, a
 //! saturating lagging element, a lagged mode hop, a lagged warm-up (named as one warm-up), a
 //! saturating temperature rate, a lagged heater voltage and the square of a gradient's rate

@@ -34,6 +34,7 @@ pub mod candidates;
 mod column_cache;
 pub mod compose;
 pub mod confirm;
+pub mod description;
 mod design;
 pub mod dynamics;
 pub mod error;
@@ -250,6 +251,7 @@ pub fn diagnose(
         exclude.push(r.as_str());
     }
     let src = candidates::sources(data, &exclude, &info.spec.signals);
+    let per_symbol = description::nats_per_symbol(&src);
     let mut families = candidates::generate(&src, &info.spec.features);
     families.extend(dynamics::propose(&prepared, &src, &info.spec.features));
     if opts.compose {
@@ -281,7 +283,8 @@ pub fn diagnose(
     };
     let refit_before = confirm::confirm(&info, &roles, runs, &mut cands, &opts.confirm, &prepared)?;
     placebo::calibrate(&prepared, &mut cands, opts.criterion.placebos);
-    opts.criterion.apply(refit_before.noise_floor, &mut cands);
+    opts.criterion
+        .apply(refit_before.noise_floor, per_symbol, &mut cands);
     // The placebos' second stage: the trainer's refits, for the leading candidates that fail only
     // the first stage and have no searched parameter (see `placebo::RefitPlacebos`).
     let retest: Vec<usize> = (0..cands.len())
@@ -330,7 +333,8 @@ pub fn diagnose(
                 r.threshold_pct = threshold;
             }
         }
-        opts.criterion.apply(refit_before.noise_floor, &mut cands);
+        opts.criterion
+            .apply(refit_before.noise_floor, per_symbol, &mut cands);
     }
     // A second look, in the additive structure the user's fit chooses, at the leading candidates
     // that beat their placebos and fail only the held-out legs, when none passes or when they
@@ -349,7 +353,8 @@ pub fn diagnose(
         &mut cands,
         |c| opts.criterion.second_look(c) && confirm::additive::outweighs(c, passing),
     )? {
-        opts.criterion.apply(refit_before.noise_floor, &mut cands);
+        opts.criterion
+            .apply(refit_before.noise_floor, per_symbol, &mut cands);
     }
     // The verification run, reported for the candidates the verdict names (see `confirm::verify`).
     let named = verdict::reported(&cands);

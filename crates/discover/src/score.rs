@@ -94,6 +94,9 @@ pub struct Scored {
     pub passes: bool,
     /// Why it does not (set by the verdict).
     pub fails: Vec<String>,
+    /// Its description length in the feature language, in nats: the prior over structures the
+    /// verdict weighs its refit's evidence against ([`crate::description`]; set by the verdict).
+    pub description_nats: f64,
     /// The candidates this one joins, when it is two effects that explain the run only together
     /// ([`crate::confirm::together`]); empty for a single effect.
     #[serde(skip)]
@@ -250,6 +253,7 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             placebo: None,
             passes: false,
             fails: Vec::new(),
+            description_nats: 0.0,
             joined: Vec::new(),
         });
     }
@@ -295,6 +299,7 @@ pub(crate) fn refitted(exprs: &[&str], evidence: f64) -> Scored {
         placebo: None,
         passes: false,
         fails: Vec::new(),
+        description_nats: 0.0,
         joined: Vec::new(),
     }
 }

@@ -25,8 +25,8 @@
 //!    of every candidate so retested (a second stage at the same rate): at most 5 % over both.
 //!
 //! "Cannot tell" is said, naming the candidates and the kind of run that would separate them
-//! ([`separating_run`]), when two candidates clear every leg and their refits' log evidence differs
-//! by less than [`INDISTINCT_NATS`]; when a second candidate is no worse than the first on the
+//! ([`separating_run`]), when two candidates clear every leg and their refits' log evidence, less
+//! their description lengths, differs by less than [`INDISTINCT_NATS`]; when a second candidate is no worse than the first on the
 //! refit's evidence and on the pooled held-out figure and fails only the blocks' vote (above its
 //! placebos), or only its placebos while reading none of the first's inputs (the first then rests
 //! on a leg the better explanation failed narrowly); when the best candidate
@@ -47,8 +47,10 @@
 //! refitted the same way (`Criterion::second_look`, [`crate::confirm::additive`]).
 //!
 //! Among the candidates that pass, the one named is the one whose real refit has the most log
-//! evidence on the training run (a lag of T in place of T against the same lag beside T: the data
-//! say which). A candidate that only re-states a feature the model has (its rate with a longer
+//! evidence on the training run less its description length in the language
+//! ([`crate::description`]: a prior over structures, a few nats per function, input or operator
+//! between signals) — a lag of T in place of T against the same lag beside T: the data say which;
+//! a relay on a lag of T against a relay on T that explains the run as well: the simpler. A candidate that only re-states a feature the model has (its rate with a longer
 //! window) is a refinement, named as such and never as a missing effect.
 
 use crate::confirm::VOTE;
@@ -157,11 +159,13 @@ impl Criterion {
     }
 
     /// Marks each candidate as passing or not (with the reasons) and sorts: passing first, then by
-    /// Δ log evidence.
+    /// Δ log evidence (the refit's, less the description length, for those that pass).
     /// `noise_floor` is the one estimated from the training blocks' held-out residual
-    /// ([`crate::confirm::BaseRefit::noise_floor`]).
-    pub fn apply(&self, noise_floor: f64, cands: &mut [Scored]) {
+    /// ([`crate::confirm::BaseRefit::noise_floor`]); `per_symbol` the nats a symbol of the
+    /// language costs on this run ([`crate::description::nats_per_symbol`]).
+    pub fn apply(&self, noise_floor: f64, per_symbol: f64, cands: &mut [Scored]) {
         for c in cands.iter_mut() {
+            c.description_nats = crate::description::nats(&c.expressions, &c.replaces, per_symbol);
             let mut fails = Vec::new();
             let strong =
                 c.delta_log_evidence >= 0.0 && c.improvement_pct >= self.strong_improvement_pct;
@@ -230,9 +234,9 @@ impl Criterion {
             c.fails = fails;
         }
         // Passing first; among them missing effects before refinements, then by the real refits'
-        // evidence; the rest by the scoring's evidence.
-        let rank = |c: &Scored| match (&c.confirmation, c.passes) {
-            (Some(k), true) => k.delta_log_evidence_refit,
+        // evidence less the description length; the rest by the scoring's evidence.
+        let rank = |c: &Scored| match (posterior(c), c.passes) {
+            (Some(p), true) => p,
             _ => c.delta_log_evidence,
         };
         cands.sort_by(|a, b| {
@@ -256,6 +260,14 @@ pub enum Verdict {
     CannotTell,
     /// None did.
     None,
+}
+
+/// A refitted candidate's log posterior odds against the model, up to a constant: its real
+/// refit's Δ log evidence less its description length ([`crate::description`]).
+fn posterior(c: &Scored) -> Option<f64> {
+    c.confirmation
+        .as_ref()
+        .map(|k| k.delta_log_evidence_refit - c.description_nats)
 }
 
 /// Log evidence (nats) below which two hypotheses cannot be told apart: "not worth more than a
@@ -409,9 +421,10 @@ pub fn separating_run(a: &Scored, b: &Scored) -> String {
 }
 
 /// A second candidate the run cannot tell from the first: one that clears the criterion as a
-/// missing effect with a real refit's evidence within [`INDISTINCT_NATS`] of the first's; or
-/// ([`Rival::NoWorse`]) one that is no worse on either judge — its refit's evidence at least the
-/// first's less [`INDISTINCT_NATS`], its pooled held-out improvement at least the first's — and
+/// missing effect with a real refit's evidence, less its description length, within
+/// [`INDISTINCT_NATS`] of the first's; or ([`Rival::NoWorse`]) one that is no worse on either
+/// judge — its refit's evidence less its description length at least the first's less
+/// [`INDISTINCT_NATS`], its pooled held-out improvement at least the first's — and
 /// fails only the blocks' vote (above its placebos), or only its placebos while reading none of
 /// the first's inputs. Why: the first then stands on a leg the second failed by a vote of a few
 /// blocks, or on the second's likeness to a drift, while the second explains more; that is no
@@ -421,10 +434,14 @@ pub fn separating_run(a: &Scored, b: &Scored) -> String {
 /// against 40 % held out, because the second lowered one of two blocks; a lag of the
 /// thermometer named, 138 nats and 19 % held out, over a kink in a heater voltage, 199 nats and
 /// 83 %, which was no better than its placebos; the truth was a lag of the heater voltage, and
-/// the lag named made the verification run four times worse.
+/// the lag named made the verification run four times worse. Why the description length: a
+/// structure one symbol richer that explains the run no better is no rival (measured on fresh
+/// seeds: `lag(g * supply_v, τ)` beside `lag(g, τ)`, `hyst(lag(heater_v, τ) − c, h)` beside the
+/// truth `hyst(heater_v − c, h)`, each within a nat, made "cannot tell" at 4.4× and 5.3× the
+/// floor).
 fn rival(cands: &[Scored]) -> Option<(&Scored, Rival)> {
     let first = cands.first()?;
-    let ev = |c: &Scored| c.confirmation.as_ref().map(|k| k.delta_log_evidence_refit);
+    let ev = posterior;
     let e0 = ev(first)?;
     let other = |c: &&Scored| c.refines.is_none() && c.expressions != first.expressions;
     let first_reads = inputs(&first.expressions);
@@ -602,15 +619,12 @@ pub fn decide(cands: &[Scored]) -> (Verdict, String) {
                     }
                 ),
             };
-            let ev = |c: &Scored| {
-                c.confirmation
-                    .as_ref()
-                    .map_or(0.0, |k| k.delta_log_evidence_refit)
-            };
+            let ev = |c: &Scored| posterior(c).unwrap_or(0.0);
             (
                 Verdict::CannotTell,
                 format!(
-                    "cannot tell: {why} (their refits' log evidence differs by {:.1}): {} — \
+                    "cannot tell: {why} (their refits' log evidence less their description \
+                     lengths differs by {:.1}): {} — \
                      {} ({}{}); or {} — {} ({}{}); {}",
                     (ev(a) - ev(b)).abs(),
                     a.effect,
@@ -699,6 +713,9 @@ mod tests {
     use super::*;
     use crate::placebo::Placebo;
 
+    /// Nats a symbol costs: `ln 16`, the language's functions and operators and four inputs.
+    const PER_SYMBOL: f64 = 2.77;
+
     /// A refitted candidate `expr` whose refit gained `evidence` nats and that beat (or not) its
     /// placebos.
     fn cand(expr: &str, evidence: f64, beats_placebos: bool) -> Scored {
@@ -718,7 +735,7 @@ mod tests {
     }
 
     fn decided(mut cands: Vec<Scored>) -> (Verdict, String) {
-        Criterion::default().apply(0.1, &mut cands);
+        Criterion::default().apply(0.1, PER_SYMBOL, &mut cands);
         decide(&cands)
     }
 
@@ -742,7 +759,7 @@ mod tests {
             c.residual_std_after = 2.8;
             c.unconfirmed = Some(format!("{VOTE} 0 of 5 blocks"));
             let mut v = vec![c];
-            crit.apply(0.1, &mut v);
+            crit.apply(0.1, PER_SYMBOL, &mut v);
             v.remove(0)
         };
         let held_out_only = judged(cand("abs(heater_v - 12.1)", 276.0, true));
@@ -759,7 +776,7 @@ mod tests {
         assert!(!crit.second_look(&judged(weak)));
         let passing = {
             let mut v = vec![cand("lag(T, 300)", 12.0, true)];
-            crit.apply(0.1, &mut v);
+            crit.apply(0.1, PER_SYMBOL, &mut v);
             v.remove(0)
         };
         assert!(passing.passes && !crit.second_look(&passing));
@@ -804,6 +821,33 @@ mod tests {
         assert_eq!(v, Verdict::CannotTell, "{t}");
         assert!(t.contains("lag(T, 300)") && t.contains("rate(T)"), "{t}");
         assert!(t.contains("ramps at a second rate"), "{t}");
+    }
+
+    /// A structure one function richer that explains the run as well is no rival: the simpler is
+    /// named, whichever has the few tenths of a nat more; one that explains the run by more than
+    /// its extra symbol costs is named in its place.
+    #[test]
+    fn a_richer_structure_must_explain_more_than_it_costs() {
+        for (simple, rich) in [(10.0, 10.4), (10.4, 10.0)] {
+            let (v, t) = decided(vec![
+                cand("hyst(lag(T, 900) - 20, 3)", rich, true),
+                cand("hyst(T - 20, 3)", simple, true),
+            ]);
+            assert_eq!(v, Verdict::MissingEffect, "{t}");
+            assert!(t.contains("'hyst(T - 20, 3)'"), "{t}");
+        }
+        let (v, t) = decided(vec![
+            cand("hyst(lag(T, 900) - 20, 3)", 10.0 + PER_SYMBOL + 1.5, true),
+            cand("hyst(T - 20, 3)", 10.0, true),
+        ]);
+        assert_eq!(v, Verdict::MissingEffect, "{t}");
+        assert!(t.contains("'hyst(lag(T, 900) - 20, 3)'"), "{t}");
+        // Within a nat once priced: a tie.
+        let (v, t) = decided(vec![
+            cand("hyst(lag(T, 900) - 20, 3)", 10.0 + PER_SYMBOL + 0.5, true),
+            cand("hyst(T - 20, 3)", 10.0, true),
+        ]);
+        assert_eq!(v, Verdict::CannotTell, "{t}");
     }
 
     /// A second candidate no worse on the evidence or the pooled held-out figure, which fails only
@@ -881,7 +925,7 @@ mod tests {
             placebos: 0,
             ..Criterion::default()
         };
-        crit.apply(0.1, &mut cands);
+        crit.apply(0.1, PER_SYMBOL, &mut cands);
         assert_eq!(decide(&cands).0, Verdict::MissingEffect);
     }
 
@@ -891,7 +935,7 @@ mod tests {
     #[test]
     fn the_reported_candidates_are_those_the_sentence_gives_figures_for() {
         let sorted = |mut cands: Vec<Scored>| {
-            Criterion::default().apply(0.1, &mut cands);
+            Criterion::default().apply(0.1, PER_SYMBOL, &mut cands);
             cands
         };
         let one = sorted(vec![

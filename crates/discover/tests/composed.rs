@@ -163,12 +163,14 @@ fn check(s: &Scenario, tol: f64) {
 }
 
 /// A relay on a lagging element, on a run with one ramp each way at one rate, explains the
-/// training run exactly as well as a wider relay on the thermometer itself: the verdict says it
-/// cannot tell, naming both, the truth's shape among them.
+/// training run exactly as well as a wider relay on the thermometer itself (their refits' log
+/// evidence the same to a tenth of a nat). The wider relay is one function simpler, and the
+/// structure prior ([`tcomp_discover::description`]) names it: the error falls on the
+/// verification run, and the relay on the lag stays in the table beside it.
 #[test]
-fn a_mode_hop_seen_through_a_lag_is_told_as_a_tie() {
-    let (named, _, _, text) = run_scenario(&Scenario {
-        name: "mode hop of a lagging element, a tie",
+fn a_mode_hop_seen_through_a_lag_names_the_simpler_of_two_equal_relays() {
+    let (_, _, _, text) = run_scenario(&Scenario {
+        name: "mode hop of a lagging element, the simpler relay",
         sensor: SensorKind::Qma,
         effects: &[EffectKind::Poly],
         seed: 38,
@@ -176,14 +178,25 @@ fn a_mode_hop_seen_through_a_lag_is_told_as_a_tie() {
         multiple: 6.0,
         idle: false,
     });
-    assert!(!named, "{text}");
-    assert!(text.contains("verdict CannotTell"), "{text}");
+    assert!(text.contains("verdict MissingEffect"), "{text}");
     assert!(
-        text.contains("--feature 'hyst(lag(t_qma_c, ")
-            && text.contains("--feature 'hyst(t_qma_c - "),
+        text_expression(&text).starts_with("hyst(t_qma_c - "),
         "{text}"
     );
-    assert!(text.contains("ramps at a second rate"), "{text}");
+    assert!(
+        text.contains("a relay on t_qma_c through a lag of"),
+        "{text}"
+    );
+    let verification = text
+        .split("on the verification run ")
+        .nth(1)
+        .and_then(|r| r.split(" (").next())
+        .map(numbers)
+        .unwrap_or_default();
+    assert!(
+        matches!(verification[..], [before, after] if after < before),
+        "{verification:?}\n{text}"
+    );
 }
 
 /// A composed shape whose regime the run barely visits is no candidate: here two clamps of a rate
@@ -316,8 +329,9 @@ scenarios! {
     /// of a relay is a wider band. It was named a relay on `t_qma_c` itself, switching at 34.6
     /// and −23.4, 1.85× where the truth form reaches 0.91×. Since a composition that ties the
     /// best single shape is handed on: "cannot tell", naming both (the screen 111.1 against
-    /// 110.9 nats, the refits 0.0 apart), 5.53× with nothing added; asserted by
-    /// `a_mode_hop_seen_through_a_lag_is_told_as_a_tie`.
+    /// 110.9 nats, the refits 0.0 apart), 5.53× with nothing added. Since the structure prior:
+    /// the wider relay, one function simpler, is named again, 1.85×; asserted by
+    /// `a_mode_hop_seen_through_a_lag_names_the_simpler_of_two_equal_relays`.
     #[ignore = "not identifiable here: run with --ignored to measure it"]
     a_mode_hop_seen_through_a_lag: "mode hop of a lagging element", Qma, [Poly], 38, "hyst(lag(t_qma_c, 1800) - 15, 8)", 6.0, false, 0.25;
 }
