@@ -94,9 +94,10 @@
 //! lagged relay and a relay on a lagged supply are named with their parameters exactly; the rate of a lagged input as a
 //! lagged rate, the size of a temperature's rate or a supply's, the rate of a saturating supply, a
 //! lagged V-shaped supply, a lagged parabola in the supply, a kink in a lagged supply, a lagged
-//! heater voltage (`lag(heater_v, 700)`); a mode hop of a lagging element is named as the wider relay on
-//! the thermometer, which the run cannot tell from it and which is one function simpler. Not yet: an input times a rate, a lagged rate (named as
-//! the lag it equals with the model's own `T`), a narrow mode hop, a saturating gradient, a
+//! heater voltage (`lag(heater_v, 700)`); a mode hop of a lagging element is named as the wider
+//! relay on the thermometer, which the run cannot tell from it and which is one function simpler.
+//! Not yet: an input times a rate, a lagged rate (named as the lag it equals with the model's own
+//! `T`), a narrow mode hop, a saturating gradient, a
 //! saturating lagging element, a lagged mode hop, a lagged warm-up (named as one warm-up), a
 //! saturating temperature rate and the square of a gradient's rate ("cannot tell"), a relay on the supply times the temperature (none) or times its rate, a relay
 //! on a lagged gradient (named with its lag 1.6× the truth's, 1.75× the floor), and a kink in a second input (it leads here, and the joint model's held-out refits

@@ -26,7 +26,8 @@
 //!
 //! "Cannot tell" is said, naming the candidates and the kind of run that would separate them
 //! ([`separating_run`]), when two candidates clear every leg and their refits' log evidence, less
-//! their description lengths, differs by less than [`INDISTINCT_NATS`]; when a second candidate is no worse than the first on the
+//! their description lengths, differs by less than [`INDISTINCT_NATS`]; when a second candidate is
+//! no worse than the first on the
 //! refit's evidence and on the pooled held-out figure and fails only the blocks' vote (above its
 //! placebos), or only its placebos while reading none of the first's inputs (the first then rests
 //! on a leg the better explanation failed narrowly); when the best candidate
@@ -50,8 +51,9 @@
 //! evidence on the training run less its description length in the language
 //! ([`crate::description`]: a prior over structures, a few nats per function, input or operator
 //! between signals) — a lag of T in place of T against the same lag beside T: the data say which;
-//! a relay on a lag of T against a relay on T that explains the run as well: the simpler. A candidate that only re-states a feature the model has (its rate with a longer
-//! window) is a refinement, named as such and never as a missing effect.
+//! a relay on a lag of T against a relay on T that explains the run as well: the simpler. A
+//! candidate that only re-states a feature the model has (its rate with a longer window) is a
+//! refinement, named as such and never as a missing effect.
 
 use crate::confirm::VOTE;
 use crate::score::Scored;
