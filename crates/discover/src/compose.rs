@@ -90,18 +90,29 @@
 //! ([`crate::placebo`]).
 //!
 //! Measured (`tests/composed.rs`, `tests/false_discoveries.rs`, BENCHMARKS.md): a mode hop, a
-//! relay on a supply voltage, a second input or a gradient away from zero, a saturating supply, a
-//! lagged relay and a relay on a lagged supply are named with their parameters exactly; the rate of a lagged input as a
-//! lagged rate, the size of a temperature's rate or a supply's, the rate of a saturating supply, a
-//! lagged V-shaped supply, a lagged parabola in the supply, a kink in a lagged supply, a lagged
-//! heater voltage (`lag(heater_v, 700)`); a mode hop of a lagging element is named as the wider
-//! relay on the thermometer, which the run cannot tell from it and which is one function simpler.
-//! Not yet: an input times a rate, a lagged rate (named as the lag it equals with the model's own
-//! `T`), a narrow mode hop, a saturating gradient, a
-//! saturating lagging element, a lagged mode hop, a lagged warm-up (named as one warm-up), a
-//! saturating temperature rate and the square of a gradient's rate ("cannot tell"), a relay on the supply times the temperature (none) or times its rate, a relay
-//! on a lagged gradient (named with its lag 1.6× the truth's, 1.75× the floor), and a kink in a second input (it leads here, and the joint model's held-out refits
-//! reject it: see [`crate::confirm`]).
+//! mode hop of a lagging element, a relay on a supply voltage or on a gradient away from zero, a
+//! lagged relay and a V-shaped supply are named with their parameters exactly; the rate of a
+//! lagged input as a lagged rate, the size of a temperature's rate or a supply's, the rate of a
+//! saturating supply, a lagged V-shaped supply, a kink in a lagged supply, a lagged heater
+//! voltage (`lag(heater_v, 700)`).
+//! Not yet: an input times a rate, a lagged rate (named as the lag it equals with the model's
+//! own `T`), a narrow mode hop, a saturating gradient, a saturating lagging element, a lagged
+//! mode hop, a lagged warm-up (named as one warm-up), the square of a gradient's rate; a
+//! saturating supply (named as a kink's clamp whose bounds the run prefers to the truth's), a
+//! relay on a heater that steps between levels (any switching point between two of them is the
+//! same training column), a relay on a lagged supply ("cannot tell": its held-out refits
+//! disagree), a relay on the supply times the temperature (the shape named, a switching point
+//! 0.1 V off, which the verification run magnifies) or times its rate, a relay on a lagged
+//! gradient (named with its lag 1.5× the truth's), and a kink in a second input (named through a
+//! short lag of it).
+//!
+//! Places are written to the run's precision (`plainest`, below): the shortest number whose
+//! gain the run cannot tell from the estimate's. A relay's switching points are otherwise
+//! estimated to a hundredth of a degree the run does not pin, and printed to significant figures
+//! of their own size they land on a grid as coarse as 1 °C (measured: a mode hop at 30 and 10 °C
+//! was named through a 94 s lag on three runs of four, 3.5× the floor; with places written to
+//! the run's precision it is named exactly on one of them too, 1.02×, and on the other two the
+//! search of the relay alone still stops at a falling point of 8.1 °C).
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
@@ -165,13 +176,40 @@ impl Range {
         }
     }
 
-    /// The value as printed: two significant figures for sizes, three for places.
+    /// The value as printed: two significant figures for a size; a place to the decade below a
+    /// [`LOCATION_STEPS`]th of the range, its operand's spread — not to significant figures of
+    /// its own size, which put a switching point 10 °C from zero on a grid of 0.1 °C and one
+    /// 30 °C away on 1 °C (measured: a mode hop at 30 °C rising and 10 °C falling could be
+    /// written only as 30.9 and 8.9, 4.3 nats below the truth, and a relay through a 94 s lag
+    /// was named instead: 3.5× the floor on the verification run, where the truth reaches 1.02×).
     fn rounded(&self, v: f64) -> f64 {
         match self.role {
-            Role::Location => significant(v, 3),
+            Role::Location => to_decimals(v, self.decimals()),
             _ => significant(v, 2),
         }
     }
+
+    /// Decimals a place on this range is printed to.
+    fn decimals(&self) -> usize {
+        let step = (self.hi - self.lo).abs() / LOCATION_STEPS;
+        if step.is_finite() && step > 0.0 {
+            (-step.log10().floor()).clamp(0.0, 12.0) as usize
+        } else {
+            3
+        }
+    }
+}
+
+/// A place (a shift, a bound, a switching point) is printed to the decade below this fraction of
+/// its operand's spread: 0.1 °C on a run spanning 90 °C, 1 mV on a supply wandering 0.8 V.
+const LOCATION_STEPS: f64 = 200.0;
+
+/// `v` to `d` decimals, through its decimal text (so that it prints as written).
+fn to_decimals(v: f64, d: usize) -> f64 {
+    if !v.is_finite() {
+        return v;
+    }
+    format!("{v:.d$}").parse().unwrap_or(v)
 }
 
 /// An input the compositions start from.
@@ -222,6 +260,26 @@ impl Shape {
         self.inner.as_ref().map_or(0, |f| f.shape.params()) + self.ranges.len()
     }
 
+    /// The range of parameter `j` (the inner shape's first, then this one's).
+    fn range_at(&self, j: usize) -> Option<Range> {
+        let k = self.inner.as_ref().map_or(0, |f| f.shape.params());
+        match &self.inner {
+            Some(f) if j < k => f.shape.range_at(j),
+            _ => self.ranges.get(j - k).copied(),
+        }
+    }
+
+    /// The other switching point of the relay whose point parameter `j` is, if it is one.
+    fn partner(&self, j: usize) -> Option<usize> {
+        let k = self.inner.as_ref().map_or(0, |f| f.shape.params());
+        match &self.inner {
+            Some(f) if j < k => f.shape.partner(j),
+            _ if self.switching && j == k => Some(k + 1),
+            _ if self.switching && j == k + 1 => Some(k),
+            _ => None,
+        }
+    }
+
     /// The refinement's step per parameter: a grid step of the level the parameter belongs to.
     fn steps(&self) -> Vec<f64> {
         let mut out = self.inner.as_ref().map_or(Vec::new(), |f| f.shape.steps());
@@ -246,11 +304,14 @@ impl Shape {
             .map(|(r, &x)| r.rounded(r.at(x)))
             .collect();
         if self.switching {
-            // Two switching points, upper and lower, as the shift and the threshold around it.
-            if let (Some(&a), Some(&b)) = (all.first(), all.get(1)) {
+            // Two switching points, upper and lower, as the shift and the threshold around it:
+            // each point printed as a place, their middle and half-distance to one decimal more,
+            // so that `c ± h` gives the points back exactly.
+            if let (Some(&a), Some(&b), Some(r)) = (all.first(), all.get(1), self.ranges.first()) {
                 let (hi, lo) = (a.max(b), a.min(b));
-                all[0] = significant((hi + lo) / 2.0, 3);
-                all[1] = significant((hi - lo) / 2.0, 2);
+                let d = r.decimals() + 1;
+                all[0] = to_decimals((hi + lo) / 2.0, d);
+                all[1] = to_decimals((hi - lo) / 2.0, d);
             }
         }
         let mut vals = all.into_iter();
@@ -1198,9 +1259,135 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
     all.sort_by(|a, b| b.gain.total_cmp(&a.gain));
     let mut seen = HashSet::new();
     all.retain(|f| seen.insert(signature(&f.expr().to_string())));
+    all.truncate(PLAINEST * PROPOSED);
+    let all: Vec<Found> = all
+        .into_par_iter()
+        .map(|f| plainest(f, |e| screen.gain(e)))
+        .collect();
     let mut all = simplest(p, all);
     all.truncate(PROPOSED);
     all.iter().map(|f| family(f, src, among)).collect()
+}
+
+/// How many times [`PROPOSED`] of the leading shapes have their places written plainly before the
+/// simplest of each column is chosen ([`plainest`]).
+const PLAINEST: usize = 2;
+
+/// Nats a place may cost to be written more plainly: half of what the run cannot tell apart
+/// ([`crate::verdict::INDISTINCT_NATS`]), so that a relay's two switching points together stay
+/// within it.
+const PLAIN_SLACK: f64 = 0.5 * crate::verdict::INDISTINCT_NATS;
+
+/// `f` with each place (a switching point, a shift, a bound) written with the fewest digits among
+/// the values whose gain is within [`PLAIN_SLACK`] of the estimate's, the nearest such to it.
+///
+/// Why: a place is known only as well as the run pins it. Where the operand visits a few levels
+/// (a heater stepping between set points), every switching point between two of them gives the
+/// same training column, and the search stops anywhere on that plateau; where it passes the
+/// point on a ramp, a tenth of a degree either way is within the noise. Printing the estimate to
+/// a fixed grid then reports digits the run does not hold (measured: a relay on a heater named
+/// `hyst(heater_v − 12.1895, 0.2395)` where `hyst(heater_v − 12.1, 0.15)` has the same training
+/// column; on the verification run, which visits the levels between, 5.24× the floor against
+/// 1.07×). The shortest number the run cannot tell from the estimate is the estimate stated to
+/// the run's own precision: the parameter's share of a description length (Rissanen's two-part
+/// code), as [`crate::description`] prices the structure.
+fn plainest(mut f: Found, objective: impl Fn(&Expr) -> f64) -> Found {
+    f.gain = objective(&f.expr());
+    for j in 0..f.u.len() {
+        let Some(r) = f.shape.range_at(j).filter(|r| r.role == Role::Location) else {
+            continue;
+        };
+        let span = r.hi - r.lo;
+        let Some(&u0) = f.u.get(j) else {
+            continue;
+        };
+        if !(span.is_finite() && span > 0.0) {
+            continue;
+        }
+        let v0 = r.at(u0);
+        let quantum = 10f64.powi(-(r.decimals() as i32));
+        let gain_at = |v: f64| {
+            let mut u = f.u.clone();
+            if let Some(x) = u.get_mut(j) {
+                *x = ((v - r.lo) / span).clamp(0.0, 1.0);
+            }
+            objective(&f.shape.build(&u))
+        };
+        let tied = |v: f64| gain_at(v) >= f.gain - PLAIN_SLACK;
+        // Each side: steps doubling from one quantum while the gain stays tied, then the edge
+        // bisected between the last tied value and the first that is not.
+        let edge = |dir: f64| {
+            let (mut inside, mut step) = (v0, quantum);
+            let mut outside = None;
+            for _ in 0..PLAIN_STEPS {
+                let v = v0 + dir * step;
+                if !(r.lo..=r.hi).contains(&v) {
+                    break;
+                }
+                if tied(v) {
+                    inside = v;
+                    step *= 2.0;
+                } else {
+                    outside = Some(v);
+                    break;
+                }
+            }
+            if let Some(mut out) = outside {
+                for _ in 0..PLAIN_BISECTIONS {
+                    let mid = 0.5 * (inside + out);
+                    if tied(mid) {
+                        inside = mid;
+                    } else {
+                        out = mid;
+                    }
+                }
+            }
+            inside
+        };
+        let (lo, hi) = (edge(-1.0), edge(1.0));
+        let Some(v) = shortest_between(lo, hi, v0, quantum) else {
+            continue;
+        };
+        // A relay's two switching points written as one would make it a comparator, which
+        // chatters on the operand's noise: another function, not a plainer number.
+        let other = f.shape.partner(j).and_then(|k| {
+            let r = f.shape.range_at(k)?;
+            f.u.get(k).map(|&u| r.rounded(r.at(u)))
+        });
+        if other.is_some_and(|o| (o - v).abs() < 0.5 * quantum) {
+            continue;
+        }
+        if let Some(x) = f.u.get_mut(j) {
+            *x = ((v - r.lo) / span).clamp(0.0, 1.0);
+        }
+        f.gain = objective(&f.expr());
+    }
+    f
+}
+
+/// Doubling steps of [`plainest`]'s search for the edge of the tied values, each way.
+const PLAIN_STEPS: usize = 8;
+/// Bisections of that edge.
+const PLAIN_BISECTIONS: usize = 3;
+
+/// The number in `[lo, hi]` with the fewest decimals (a multiple of the largest power of ten
+/// that has one there, down to `quantum`), the nearest such to `at`.
+fn shortest_between(lo: f64, hi: f64, at: f64, quantum: f64) -> Option<f64> {
+    if !(lo.is_finite() && hi.is_finite() && hi >= lo && quantum > 0.0) {
+        return None;
+    }
+    let mut p = 10f64.powf(hi.abs().max(lo.abs()).max(quantum).log10().ceil());
+    while p >= quantum * 0.999 {
+        let first = (lo / p).ceil();
+        let last = (hi / p).floor();
+        if first <= last {
+            let k = (at / p).round().clamp(first, last);
+            let decimals = (-p.log10().round()).max(0.0) as usize;
+            return Some(to_decimals(k * p, decimals));
+        }
+        p /= 10.0;
+    }
+    None
 }
 
 /// The first `keep` of `found` (sorted best first), and beside them each operand's first
@@ -1500,6 +1687,56 @@ mod tests {
             describe_top(&l, &src),
             "supply_v acts through a lag of τ ≈ 240 s"
         );
+    }
+
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn a_relays_switching_points_are_written_exactly_whatever_their_size() {
+        // A temperature spanning 90 °C: its places are printed to 0.1 °C, so switching points
+        // 30.3 and 9.9 are written `hyst(T − 20.1, 10.2)`, not 20.1 ± 10 (two significant
+        // figures of the half-width would put a wide relay's points on a 1 °C grid).
+        let t = Range {
+            lo: -30.0,
+            hi: 60.0,
+            role: Role::Location,
+        };
+        let relay = |at: Range| Shape {
+            operand: Some(Expr::name("T")),
+            inner: None,
+            op: Op::Call(lang::function("hyst").unwrap()),
+            shifted: true,
+            switching: true,
+            ranges: vec![at, at],
+            level: true,
+        };
+        let u = |r: &Range, v: f64| (v - r.lo) / (r.hi - r.lo);
+        let e = relay(t).build(&[u(&t, 30.3), u(&t, 9.9)]).to_string();
+        assert_eq!(e, "hyst(T - 20.1, 10.2)");
+        let e = relay(t).build(&[u(&t, 30.04), u(&t, 10.0)]).to_string();
+        assert_eq!(e, "hyst(T - 20, 10)");
+        // Its two points are a pair, which a plainer writing must not merge into a comparator.
+        assert_eq!(relay(t).partner(0), Some(1));
+        assert_eq!(relay(t).partner(1), Some(0));
+        // A supply wandering 0.8 V: to 1 mV.
+        let v = Range {
+            lo: 27.7,
+            hi: 28.5,
+            role: Role::Location,
+        };
+        assert_eq!(v.rounded(28.21374), 28.214);
+        assert_eq!(t.rounded(28.21374), 28.2);
+    }
+
+    #[test]
+    fn a_place_is_written_with_the_fewest_digits_the_run_allows() {
+        // A heater's relay anywhere between two visited levels: one decimal, the nearest.
+        assert_eq!(shortest_between(12.2, 12.5, 12.43, 0.001), Some(12.4));
+        // A switching point pinned to ±0.07 °C around 29.95: the whole degree.
+        assert_eq!(shortest_between(29.93, 30.08, 29.95, 0.1), Some(30.0));
+        assert_eq!(shortest_between(-0.3, 0.2, -0.1, 0.01), Some(0.0));
+        // Pinned tighter than a decimal: the finest place.
+        assert_eq!(shortest_between(9.951, 9.952, 9.9514, 0.001), Some(9.951));
+        assert_eq!(shortest_between(1.0, 0.5, 0.7, 0.1), None);
     }
 
     #[test]

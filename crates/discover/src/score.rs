@@ -20,8 +20,10 @@
 //!   on `folds` contiguous blocks of the training run, each predicted from the others with the
 //!   converged hyperparameters.
 //! * **Families** (a lag's τ, a threshold, a rate window) are marginalised over their grid:
-//!   `ln mean(exp Δ)`, so searching more values does not buy evidence; the best member ranks the
-//!   family, and [`crate::param`] then estimates the parameter of the families that are confirmed
+//!   `ln mean(exp Δ)`, so searching more values does not buy evidence; the best member names the
+//!   family — but a composition's own estimate, its first member, keeps the name unless a grid
+//!   point explains more than the run can tell apart ([`crate::verdict::INDISTINCT_NATS`]) — and
+//!   [`crate::param`] then estimates the parameter of the families that are confirmed
 //!   on a continuous scale by the real refits (the fixed base Gaussians here absorb part of a slow
 //!   effect and bias τ short).
 //! * **Replacements** (a lag of T put in place of T in every feature) are scored here as the
@@ -32,7 +34,7 @@
 pub use crate::base::{
     BaseFigures, FOLDS, Prepared, ScoreOptions, base_residual, binned_feature, prepare,
 };
-use crate::candidates::{Candidate, EffectKind, Family, Search};
+use crate::candidates::{Candidate, EffectKind, Family, Search, Searched};
 use crate::design::mean_sd;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -199,7 +201,7 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             .iter()
             .filter_map(|r| r.2.as_ref().ok().map(|s| (r.1, s)))
             .collect();
-        let Some(&(best_c, best)) = ok.iter().max_by(|a, b| a.1.delta.total_cmp(&b.1.delta)) else {
+        let Some(&(top_c, top)) = ok.iter().max_by(|a, b| a.1.delta.total_cmp(&b.1.delta)) else {
             if let Some((_, c, Err(reason))) = mine.first().map(|r| (r.0, r.1, &r.2)) {
                 skipped.push(Skipped {
                     expression: c.expressions.join(", "),
@@ -209,8 +211,22 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             }
             continue;
         };
+        // A composition's first member is its estimate, refined and written to the run's own
+        // precision (`compose::plainest`); the others are its shape's grid, there for the
+        // marginal below and the placebos. A grid point named in its place must explain more
+        // than the run can tell apart (measured: a relay on a heater stepping between levels,
+        // its estimate `hyst(heater_v − 12.125, 0.175)`, was named as the grid's `hyst(heater_v
+        // − 12.1895, 0.2395)`, the same training column within a nat: 5.24× the floor on the
+        // verification run, which visits the levels between).
+        let estimate = ok.first().filter(|(c, s)| {
+            families.get(f).is_some_and(|fam| {
+                matches!(fam.searched, Searched::Alternatives { .. })
+                    && fam.members.first().is_some_and(|m| m == *c)
+            }) && s.delta >= top.delta - crate::verdict::INDISTINCT_NATS
+        });
+        let (best_c, best) = estimate.copied().unwrap_or((top_c, top));
         let k = mine.len() as f64;
-        let mx = best.delta;
+        let mx = top.delta;
         let lse = mx
             + ok.iter()
                 .map(|(_, s)| (s.delta - mx).exp())
