@@ -72,7 +72,7 @@
 //! never composed, `abs(supply_v − 28.1)` seventh behind a relay on the supply and four shapes of
 //! an idle heater column; with it, the lag of it led the depth-two search by 77 nats). A
 //! composition is kept when it explains more than the best single shape by [`EARN_NATS`], or
-//! as much as it (within [`crate::verdict::INDISTINCT_NATS`]) and more than its own inner shape by
+//! as much as it (within [`crate::score::INDISTINCT_NATS`]) and more than its own inner shape by
 //! [`EARN_NATS`]: another explanation of the same residual, for the refits and the verdict to
 //! weigh (measured: a relay on a lagging element tied a wider relay on the thermometer, 111.1
 //! against 110.9 nats, and the wider relay was named, 1.85× the floor where the truth reaches
@@ -1246,7 +1246,7 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
     // inner shape: then it is another explanation of the same residual, and the refits decide.
     second.retain(|f| {
         f.gain > floor + EARN_NATS
-            || (f.gain > floor - crate::verdict::INDISTINCT_NATS
+            || (f.gain > floor - crate::score::INDISTINCT_NATS
                 && f.shape
                     .inner
                     .as_ref()
@@ -1274,9 +1274,9 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
 const PLAINEST: usize = 2;
 
 /// Nats a place may cost to be written more plainly: half of what the run cannot tell apart
-/// ([`crate::verdict::INDISTINCT_NATS`]), so that a relay's two switching points together stay
+/// ([`crate::score::INDISTINCT_NATS`]), so that a relay's two switching points together stay
 /// within it.
-const PLAIN_SLACK: f64 = 0.5 * crate::verdict::INDISTINCT_NATS;
+const PLAIN_SLACK: f64 = 0.5 * crate::score::INDISTINCT_NATS;
 
 /// `f` with each place (a switching point, a shift, a bound) written with the fewest digits among
 /// the values whose gain is within [`PLAIN_SLACK`] of the estimate's, the nearest such to it.

@@ -24,7 +24,7 @@
 //!
 //! Where it acts: the verdict ranks the candidates that pass by their refit's log evidence less
 //! their description length, and two of them are a tie only when those differ by less than
-//! [`crate::verdict::INDISTINCT_NATS`] ([`crate::verdict`]). On the simulated runs of the tests a
+//! [`crate::score::INDISTINCT_NATS`] ([`crate::verdict`]). On the simulated runs of the tests a
 //! symbol costs 2.6–3 nats: a structure one symbol richer must explain the run by that much more
 //! ("positive" evidence on Kass and Raftery's scale) to be preferred.
 

@@ -17,7 +17,7 @@
 //! discretely, and its evidence jumps by tens of nats between neighbouring τ's (measured on the
 //! lag-in-every-term case: −579 at the true 1800 s, −472 at a wrong pair), a surface no search
 //! can climb. A parameter moves only when the evidence rises by more than
-//! [`crate::verdict::INDISTINCT_NATS`]: values the run cannot tell apart stay where the diagnosis
+//! [`crate::score::INDISTINCT_NATS`]: values the run cannot tell apart stay where the diagnosis
 //! put them.
 
 use crate::base::Prepared;
@@ -236,7 +236,7 @@ pub(crate) fn reestimate(
                 continue;
             }
             let (u, f) = crate::param::golden(eval, lo, hi, STEPS);
-            if f > best + crate::verdict::INDISTINCT_NATS {
+            if f > best + crate::score::INDISTINCT_NATS {
                 current = with_value(&current, &p, two_significant(u.exp()));
                 best = f;
             }

@@ -22,7 +22,7 @@
 //! * **Families** (a lag's τ, a threshold, a rate window) are marginalised over their grid:
 //!   `ln mean(exp Δ)`, so searching more values does not buy evidence; the best member names the
 //!   family — but a composition's own estimate, its first member, keeps the name unless a grid
-//!   point explains more than the run can tell apart ([`crate::verdict::INDISTINCT_NATS`]) — and
+//!   point explains more than the run can tell apart ([`INDISTINCT_NATS`]) — and
 //!   [`crate::param`] then estimates the parameter of the families that are confirmed
 //!   on a continuous scale by the real refits (the fixed base Gaussians here absorb part of a slow
 //!   effect and bias τ short).
@@ -30,6 +30,11 @@
 //!   base design plus their new columns — an approximation that ranks them; whether the element
 //!   sees the lagged temperature *instead of* the thermometer's is decided by the real refits of
 //!   [`crate::confirm`], which fit the replaced feature set.
+
+/// Log evidence (nats) below which two hypotheses cannot be told apart: "not worth more than a
+/// bare mention" on Kass and Raftery's scale (`2 ln B < 2`, odds under e : 1). The verdict's ties,
+/// the composer's and the rounds' estimates, and the name a family is given all use it.
+pub const INDISTINCT_NATS: f64 = 1.0;
 
 pub use crate::base::{
     BaseFigures, FOLDS, Prepared, ScoreOptions, base_residual, binned_feature, prepare,
@@ -222,7 +227,7 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             families.get(f).is_some_and(|fam| {
                 matches!(fam.searched, Searched::Alternatives { .. })
                     && fam.members.first().is_some_and(|m| m == *c)
-            }) && s.delta >= top.delta - crate::verdict::INDISTINCT_NATS
+            }) && s.delta >= top.delta - INDISTINCT_NATS
         });
         let (best_c, best) = estimate.copied().unwrap_or((top_c, top));
         let k = mine.len() as f64;

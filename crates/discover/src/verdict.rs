@@ -56,7 +56,7 @@
 //! refinement, named as such and never as a missing effect.
 
 use crate::confirm::VOTE;
-use crate::score::Scored;
+use crate::score::{INDISTINCT_NATS, Scored};
 use serde::Serialize;
 use tcomp_train::TrainError;
 use tcomp_train::num::{SIG, change_pct, pct, plain, signed};
@@ -271,10 +271,6 @@ fn posterior(c: &Scored) -> Option<f64> {
         .as_ref()
         .map(|k| k.delta_log_evidence_refit - c.description_nats)
 }
-
-/// Log evidence (nats) below which two hypotheses cannot be told apart: "not worth more than a
-/// bare mention" on Kass and Raftery's scale (`2 ln B < 2`, odds under e : 1).
-pub const INDISTINCT_NATS: f64 = 1.0;
 
 /// `--feature 'e'` for each expression.
 fn flags(exprs: &[String]) -> String {
