@@ -33,7 +33,11 @@
 //!   column at its best prior precision, the base's hyperparameters held — closed-form, no refit.
 //!   Each shape's parameters are searched on a coarse grid on the bins' mean rows; the coarse
 //!   leaders are re-scored on every row (a bin mean smooths a noisy input before a relay sees
-//!   it) and the best refined by golden-section sweeps ([`crate::param::golden`]).
+//!   it) and the best refined by golden-section sweeps ([`crate::param::golden`]). Before that,
+//!   each place of a shape's best grid point (a switching point, a bound, a shift) is scanned
+//!   across its whole range on a finer line ([`LINE`] positions), the others held: the evidence
+//!   is peaked in a place more narrowly than the grid's step and flat between the operand's
+//!   values, where golden-section search cannot tell which way to go.
 //! - **Parameters estimated jointly**: a depth-two shape keeps its inner shape's parameters
 //!   free. Its grid holds them at the inner estimate and a quarter of their range either way,
 //!   beside a coarse grid over all its parameters together, and the refinement sweeps them with
@@ -90,21 +94,21 @@
 //! ([`crate::placebo`]).
 //!
 //! Measured (`tests/composed.rs`, `tests/false_discoveries.rs`, BENCHMARKS.md): a mode hop, a
-//! mode hop of a lagging element, a relay on a supply voltage or on a gradient away from zero, a
-//! lagged relay and a V-shaped supply are named with their parameters exactly; the rate of a
-//! lagged input as a lagged rate, the size of a temperature's rate or a supply's, the rate of a
-//! saturating supply, a lagged V-shaped supply, a kink in a lagged supply, a lagged heater
+//! relay on a supply voltage or on a gradient away from zero, a lagged relay and a V-shaped
+//! supply are named with their parameters exactly; the rate of a lagged input as a lagged rate,
+//! the size of a temperature's rate or a supply's, the rate of a saturating supply, a lagged
+//! V-shaped supply, a kink in a lagged supply, a lagged saturating supply, a lagged heater
 //! voltage (`lag(heater_v, 700)`).
-//! Not yet: an input times a rate, a lagged rate (named as the lag it equals with the model's
-//! own `T`), a narrow mode hop, a saturating gradient, a saturating lagging element, a lagged
-//! mode hop, a lagged warm-up (named as one warm-up), the square of a gradient's rate; a
-//! saturating supply (named as a kink's clamp whose bounds the run prefers to the truth's), a
-//! relay on a heater that steps between levels (any switching point between two of them is the
-//! same training column), a relay on a lagged supply ("cannot tell": its held-out refits
-//! disagree), a relay on the supply times the temperature (the shape named, a switching point
-//! 0.1 V off, which the verification run magnifies) or times its rate, a relay on a lagged
-//! gradient (named with its lag 1.5× the truth's), and a kink in a second input (named through a
-//! short lag of it).
+//! Not yet: a mode hop of a lagging element (a wider relay ties it, below), an input times a rate,
+//! a lagged rate (named as the lag it equals with the model's own `T`), a narrow mode hop, a
+//! saturating gradient, a saturating lagging element, a lagged mode hop, a lagged warm-up (named as
+//! one warm-up), the square of a gradient's rate; a saturating supply (named as a kink's clamp
+//! whose bounds the run prefers to the truth's), a relay on a heater that steps between levels (any
+//! switching point between two of them is the same training column), a relay on a lagged supply
+//! ("cannot tell": its held-out refits disagree), a relay on the supply times the temperature (the
+//! shape named, a switching point 0.1 V off, which the verification run magnifies) or times its
+//! rate, a relay on a lagged gradient (named with its lag 1.5× the truth's), and a kink in a second
+//! input (named through a short lag of it).
 //!
 //! Places are written to the run's precision (`plainest`, below): the shortest number whose
 //! gain the run cannot tell from the estimate's. A relay's switching points are otherwise
@@ -112,7 +116,10 @@
 //! of their own size they land on a grid as coarse as 1 °C (measured: a mode hop at 30 and 10 °C
 //! was named through a 94 s lag on three runs of four, 3.5× the floor; with places written to
 //! the run's precision it is named exactly on one of them too, 1.02×, and on the other two the
-//! search of the relay alone still stops at a falling point of 8.1 °C).
+//! search of the relay alone still stopped at a falling point of 8.1 °C — the line scan of each
+//! place finds 10 °C). The line scan also finds the wider relay that a relay through a lag
+//! equals on a run with one ramp rate: a mode hop of a lagging element ties it (112.2 against
+//! 112.0 nats) and is then named as the wider relay by the structure prior.
 
 use crate::base::Prepared;
 use crate::candidates::{Candidate, EffectKind, Family, Searched, Sources};
@@ -713,9 +720,66 @@ fn coarse(screen: &Screen<'_>, shape: &Shape) -> Option<Found> {
         .collect();
     pts.sort_by(|a, b| b.gain.total_cmp(&a.gain));
     pts.truncate(if shape.params() == 0 { 1 } else { STARTS });
+    // At depth one only: scanned too, a depth-two shape's places (beside its inner shape's
+    // parameters, held) find optima of the bins' mean rows that every row does not share
+    // (measured: a relay on a lagged supply, 1.41× the floor with its places refined from the
+    // grid, 5.07× with them scanned too: a lag of 170 s, not 210 s, whose relay failed the
+    // held-out blocks).
+    if let Some(top) = pts.first().filter(|_| shape.inner.is_none()) {
+        let scanned = scan_places(screen, top.clone());
+        if scanned.gain > top.gain {
+            pts.push(scanned);
+        }
+    }
     pts.into_iter()
         .map(|f| refine(f, |e| screen.gain_coarse(e)))
         .max_by(|a, b| a.gain.total_cmp(&b.gain))
+}
+
+/// Positions of a line scan across a place's range ([`scan_places`]): a 64th of the operand's
+/// spread between them.
+pub const LINE: usize = 64;
+
+/// `f` with each place (a switching point, a bound, a shift: [`Role::Location`]) of a depth-one
+/// shape scanned across its whole range on [`LINE`] positions, the other held; two passes.
+/// Why: the evidence is peaked in a place more narrowly than the grid's step — a relay's
+/// falling point 2 °C off loses 30 of 78 nats where the grid's step is 6 °C — and is flat
+/// between the operand's values, where golden-section search cannot tell which way to go
+/// (measured: a mode hop at 30 and 10 °C had its best grid point at 29.5 and −4 °C, 51 nats,
+/// and was named through a 94 s lag, 3.45× the floor).
+fn scan_places(screen: &Screen<'_>, mut f: Found) -> Found {
+    let places: Vec<usize> = (0..f.shape.params())
+        .filter(|&j| {
+            f.shape
+                .range_at(j)
+                .is_some_and(|r| r.role == Role::Location)
+        })
+        .collect();
+    for _ in 0..2 {
+        let mut moved = false;
+        for &j in &places {
+            let best = (0..LINE)
+                .map(|i| {
+                    let mut u = f.u.clone();
+                    if let Some(x) = u.get_mut(j) {
+                        *x = (i as f64 + 0.5) / LINE as f64;
+                    }
+                    let g = screen.gain_coarse(&f.shape.build(&u));
+                    (u, g)
+                })
+                .filter(|(_, g)| g.is_finite())
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((u, g)) = best.filter(|(_, g)| *g > f.gain) {
+                f.u = u;
+                f.gain = g;
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    f
 }
 
 /// Where a depth-two shape's grid holds its inner parameters: at the inner shape's estimate, and
