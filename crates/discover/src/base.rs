@@ -454,6 +454,45 @@ impl Prepared {
         Ok(out)
     }
 
+    /// The training columns of `exprs` on every sample ([`Prepared::per_sample`]) and the binned
+    /// column of `keep` ([`Prepared::binned`]), in one pass over the run where that gives the
+    /// same columns: on a run without gaps a column does not depend on what it is computed beside
+    /// ([`crate::column_cache`]), so `keep` joins `exprs`' programs and its binned column is kept
+    /// as `binned` keeps it; with gaps each is computed as its own call computes it. Why: the
+    /// composition search judges a shape's regimes on the per-sample columns of its calls and then
+    /// scores its binned column, and each pass reads every input and computes the model's signals
+    /// on all 22,000 samples of a run again.
+    pub(crate) fn per_sample_and_binned(
+        &self,
+        exprs: &[String],
+        keep: &str,
+    ) -> (Result<Vec<Vec<f64>>>, Result<Vec<f64>>) {
+        let apart = || {
+            let binned = self
+                .binned(&[keep.to_string()])
+                .map(|c| c.into_iter().next().unwrap_or_default());
+            (self.per_sample(exprs), binned)
+        };
+        if !self.train_cols.keeps() {
+            return apart();
+        }
+        let mut all = exprs.to_vec();
+        let at = all.iter().position(|e| e == keep).unwrap_or_else(|| {
+            all.push(keep.to_string());
+            all.len() - 1
+        });
+        let Ok(mut cols) = self.per_sample(&all) else {
+            return apart();
+        };
+        let binned = cols.get(at).map(|c| bin_mean(c, &self.tbins));
+        let kept = self
+            .train_cols
+            .columns(&[keep.to_string()], |_| Ok(binned.into_iter().collect()))
+            .map(|c| c.into_iter().next().unwrap_or_default());
+        cols.truncate(exprs.len());
+        (Ok(cols), kept)
+    }
+
     /// The binned training columns of `exprs`, as they are (not standardised).
     pub(crate) fn binned(&self, exprs: &[String]) -> Result<Columns> {
         let compute = |e: &[String]| {
@@ -594,4 +633,80 @@ pub fn binned_feature(p: &Prepared, expr: &str) -> Result<Vec<f64>> {
 pub fn base_residual(p: &Prepared) -> Vec<f64> {
     let r = &p.y - &p.phi * &p.base.w;
     r.iter().map(|v| v * p.ys).collect()
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// A 4,000 s run of a thermometer swinging ±10 °C every hour; `gap` seconds missing half-way.
+    fn prepared(gap: f64) -> Prepared {
+        let time: Vec<f64> = (0..4000)
+            .map(|i| f64::from(i) + if i >= 2000 { gap } else { 0.0 })
+            .collect();
+        let t: Vec<f64> = time
+            .iter()
+            .map(|s| 20.0 + 10.0 * (s / 600.0).sin())
+            .collect();
+        let y: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(i, v)| 0.01 * v + 1e-3 * (f64::from(i as u32) * 0.7).sin())
+            .collect();
+        let data = Dataset::from_columns(
+            "run.csv",
+            vec!["time_s".into(), "t".into(), "y".into()],
+            vec![time, t, y],
+        );
+        let spec = FeatureSpec {
+            signals: Vec::new(),
+            features: vec!["t".into()],
+        };
+        let roles = Roles {
+            time: "time_s".into(),
+            target: "y".into(),
+            reference: None,
+            reference_value: Some(0.0),
+            power_on_s: None,
+        };
+        let opts = ScoreOptions {
+            gap_s: Some(30.0),
+            ..ScoreOptions::default()
+        };
+        prepare(&spec, &roles, &data, None, &opts).unwrap()
+    }
+
+    /// The one pass gives the very columns the two calls compute on their own, with and without
+    /// a gap, whether the kept expression is among the others or not; an expression that cannot
+    /// be computed fails alone.
+    #[test]
+    fn one_pass_gives_the_columns_of_two() {
+        for gap in [0.0, 2000.0] {
+            let p = prepared(gap);
+            assert_eq!(p.train_cols.keeps(), gap == 0.0);
+            let exprs = vec!["hyst(t - 20, 2)".to_string(), "t - 20".to_string()];
+            let alone = |e: &str| {
+                compute_binned(
+                    &p.signals,
+                    &[e.to_string()],
+                    &p.data,
+                    &p.time,
+                    &p.starts,
+                    &p.tbins,
+                )
+                .unwrap()
+                .remove(0)
+            };
+            for keep in ["lag(hyst(t - 20, 2), 300)", "hyst(t - 20, 2)"] {
+                let (cols, binned) = p.per_sample_and_binned(&exprs, keep);
+                assert_eq!(cols.unwrap(), p.per_sample(&exprs).unwrap(), "{gap} {keep}");
+                assert_eq!(binned.unwrap(), alone(keep), "{gap} {keep}");
+                assert_eq!(p.binned(&[keep.to_string()]).unwrap()[0], alone(keep));
+            }
+            let (cols, binned) = p.per_sample_and_binned(&exprs, "nosuch(t)");
+            assert_eq!(cols.unwrap(), p.per_sample(&exprs).unwrap());
+            assert!(binned.is_err());
+        }
+    }
 }

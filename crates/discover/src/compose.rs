@@ -532,17 +532,23 @@ impl<'a> Screen<'a> {
     }
 
     /// The gain of `e` computed on every row (nats; −∞ when its column cannot be computed or is
-    /// constant).
+    /// constant, or when the run does not visit every regime of its calls: see
+    /// [`Screen::regimes_and_column`]).
     fn gain(&self, e: &Expr) -> f64 {
-        if !self.regimes_visited(e) {
+        let text = e.to_string();
+        let (visited, col) = match self.regimes_known(&text) {
+            Some(v) => (v, None),
+            None => self.regimes_and_column(e, &text),
+        };
+        if !visited {
             return f64::NEG_INFINITY;
         }
-        let Ok(cols) = self.p.binned(&[e.to_string()]) else {
-            return f64::NEG_INFINITY;
-        };
-        cols.into_iter()
-            .next()
-            .map_or(f64::NEG_INFINITY, |c| self.gain_of(c))
+        let col = col.unwrap_or_else(|| {
+            self.p
+                .binned(&[text])
+                .map(|c| c.into_iter().next().unwrap_or_default())
+        });
+        col.map_or(f64::NEG_INFINITY, |c| self.gain_of(c))
     }
 
     /// The gain of `e` computed on the bins' mean rows: a coarse grid's screen.
@@ -563,40 +569,50 @@ impl<'a> Screen<'a> {
         g
     }
 
-    /// Whether the training run's samples visit every regime of `e`'s saturating or switching
-    /// calls ([`crate::regimes`]): a shape that fails has no gain on every row, so that the
-    /// re-scoring and the refinement pass it by. (The coarse screen does not judge it: a bin's
-    /// mean input blurs a relay on a fast input's rate out of one of its states.)
-    fn regimes_visited(&self, e: &Expr) -> bool {
-        let text = e.to_string();
-        if let Some(v) = self
-            .regimes_seen
+    /// Whether the run visits every regime of the expression spelled `text`, when already judged.
+    fn regimes_known(&self, text: &str) -> Option<bool> {
+        self.regimes_seen
             .lock()
             .ok()
-            .and_then(|m| m.get(&text).copied())
-        {
-            return v;
-        }
+            .and_then(|m| m.get(text).copied())
+    }
+
+    /// Whether the training run's samples visit every regime of `e`'s saturating or switching
+    /// calls ([`crate::regimes`]), kept by its text: a shape that fails has no gain on every row,
+    /// so that the re-scoring and the refinement pass it by. (The coarse screen does not judge it:
+    /// a bin's mean input blurs a relay on a fast input's rate out of one of its states.) With
+    /// it, `e`'s binned column when it was computed in the same pass
+    /// ([`Prepared::per_sample_and_binned`]).
+    fn regimes_and_column(
+        &self,
+        e: &Expr,
+        text: &str,
+    ) -> (bool, Option<crate::error::Result<Vec<f64>>>) {
         let calls = crate::regimes::calls(e, &|name| {
             behaviours()
                 .iter()
                 .any(|(f, b)| f.name == name && b.saturates)
         });
-        let features: Vec<String> = calls
-            .iter()
-            .flat_map(|c| [c.call.to_string(), c.operand.to_string()])
-            .collect();
-        let starts = self.p.stretch_starts();
-        let v = calls.is_empty()
-            || self.p.per_sample(&features).map_or(true, |cols| {
+        let (v, col) = if calls.is_empty() {
+            (true, None)
+        } else {
+            let features: Vec<String> = calls
+                .iter()
+                .flat_map(|c| [c.call.to_string(), c.operand.to_string()])
+                .collect();
+            let starts = self.p.stretch_starts();
+            let (cols, col) = self.p.per_sample_and_binned(&features, text);
+            let v = cols.map_or(true, |cols| {
                 cols.chunks(2)
                     .zip(&calls)
                     .all(|(pair, c)| c.visited(&pair[0], &pair[1], starts))
             });
+            (v, Some(col))
+        };
         if let Ok(mut m) = self.regimes_seen.lock() {
-            m.insert(text, v);
+            m.insert(text.to_string(), v);
         }
-        v
+        (v, col)
     }
 
     /// [`Screen::gain_coarse`] computed.
