@@ -637,11 +637,11 @@ pub fn base_residual(p: &Prepared) -> Vec<f64> {
 
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A 4,000 s run of a thermometer swinging ±10 °C every hour; `gap` seconds missing half-way.
-    fn prepared(gap: f64) -> Prepared {
+    pub(crate) fn prepared(gap: f64) -> Prepared {
         let time: Vec<f64> = (0..4000)
             .map(|i| f64::from(i) + if i >= 2000 { gap } else { 0.0 })
             .collect();

@@ -31,7 +31,11 @@
 //!   max-statistic of Westfall and Young): under "nothing is missing" a candidate and its placebos
 //!   are alike, so the chance that any candidate beats all of them is about 1 / (placebos + 1) =
 //!   2.5 % — a false-alarm rate set by construction, not by tuning, and measured on the negative
-//!   controls (`tests/false_discoveries.rs`).
+//!   controls (`tests/false_discoveries.rs`). "Tested" includes the compositions ranked for the
+//!   refit slots by this statistic ([`statistics_alone`], `crate::confirm::confirm`) that did not
+//!   get one: a choice made by the statistic is part of the test (measured: without their
+//!   placebos, a relay on a slow rate of an idle supply, fourth of four compositions by evidence
+//!   and first by this statistic, was refitted and named on a plain negative control).
 //!
 //! - **A second stage** for a candidate with no searched parameter that fails the first but
 //!   clears every other leg ([`RefitPlacebos`]): the trainer's refits of its placebos on the
@@ -307,7 +311,9 @@ fn joined_placebo(
 type Tested = (usize, Vec<(Vec<Vec<f64>>, bool)>, Vec<usize>);
 
 /// Tests every refitted candidate of `cands` against `placebos` placebos each (0: no test) and
-/// stores the result in [`Scored::placebo`].
+/// stores the result in [`Scored::placebo`]. The placebos of a composition ranked for the refit
+/// slots ([`Scored::ranked`]) and not refitted count in the threshold too: the slots were chosen
+/// by this statistic, so the max-statistic runs over every candidate the choice looked at.
 pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
     for c in cands.iter_mut() {
         c.placebo = None;
@@ -324,7 +330,10 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
     let n = p.y.len();
     // Every column the sets below read, computed together first (they are read one at a time).
     let mut wanted: Vec<String> = Vec::new();
-    for c in cands.iter().filter(|c| c.confirmation.is_some()) {
+    // Refitted candidates are tested; compositions ranked for the refit slots by this statistic
+    // and not refitted count in the threshold only (see `crate::confirm::confirm`).
+    let counted = |c: &Scored| c.confirmation.is_some() || c.ranked;
+    for c in cands.iter().filter(|c| counted(c)) {
         wanted.extend(c.expressions.iter().cloned());
         if let Some(search) = &c.search {
             for v in family_grid(search.lo, search.hi) {
@@ -342,7 +351,7 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
     let tested: Vec<Tested> = cands
         .iter()
         .enumerate()
-        .filter(|(_, c)| c.confirmation.is_some() && c.joined.is_empty())
+        .filter(|(_, c)| counted(c) && c.joined.is_empty())
         .filter_map(|(i, c)| {
             let members = member_sets(p, c)?;
             let s = shifts(&members[0].0, n, placebos);
@@ -392,7 +401,7 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
             .find(|((tt, m, ss), _)| *tt == t && *m == 0 && *ss == 0)
             .map_or(f64::NEG_INFINITY, |(_, v)| *v)
             - cands.get(*i).map_or(0.0, |c| shape_prior(&c.searched));
-        if let Some(c) = cands.get_mut(*i) {
+        if let Some(c) = cands.get_mut(*i).filter(|c| c.confirmation.is_some()) {
             c.placebo = Some(Placebo {
                 rho,
                 statistic,
@@ -412,6 +421,31 @@ pub fn calibrate(p: &Prepared, cands: &mut [Scored], placebos: usize) {
     {
         c.placebo = joined_placebo(p, rho, base_evidence, c, placebos);
     }
+}
+
+/// Each of `cands`' first-stage statistic alone (Δ log evidence under AR(1) noise of the scoring
+/// design with its columns, less its shape's prior: what [`calibrate`] compares with the
+/// placebos), without the placebos; `NEG_INFINITY` where its columns cannot be computed.
+///
+/// Why: the compositions' refit slots ([`crate::confirm`]) go to those most likely to pass this
+/// leg. A composition passes the placebo leg only by this statistic (its parameters are searched,
+/// so no second stage), and ranked by the independent-noise evidence a slow shape that explains
+/// the drift outranks a fast one that explains the effect (see `crate::confirm::confirm`).
+pub(crate) fn statistics_alone(p: &Prepared, cands: &[&Scored]) -> Vec<f64> {
+    let start = (&p.base.alpha[..], p.base.beta);
+    let Some((_, base_evidence, rho)) = ar1::fit_best_rho(&p.phi, &p.y, &p.groups, start, 1.0, &[])
+    else {
+        return vec![f64::NEG_INFINITY; cands.len()];
+    };
+    let exprs: Vec<String> = cands.iter().flat_map(|c| c.expressions.clone()).collect();
+    p.prefetch(&exprs, false);
+    cands
+        .par_iter()
+        .map(|c| match p.standardised_training(&c.expressions) {
+            Ok(cols) => statistic(p, rho, base_evidence, &cols, false) - shape_prior(&c.searched),
+            Err(_) => f64::NEG_INFINITY,
+        })
+        .collect()
 }
 
 /// The column sets a candidate's placebos are searched over: its columns at its parameter first,
@@ -511,6 +545,38 @@ mod tests {
         assert_eq!(cochrane_orcutt(&ar(0.8), 0.995), 0.8);
         assert_eq!(cochrane_orcutt(&ar(0.95), 0.995), 0.95);
         assert_eq!(cochrane_orcutt(&ar(0.95), 0.9), 0.9);
+    }
+
+    /// The compositions are ranked for their refit slots by the very statistic the leg compares
+    /// with the placebos; a ranked composition that was not refitted gets no placebo test of its
+    /// own, but its placebos count in the threshold every tested candidate meets.
+    #[test]
+    #[allow(clippy::unwrap_used)]
+    fn a_ranked_composition_counts_in_the_threshold() {
+        let p = crate::base::tests::prepared(0.0);
+        let refitted = |e: &str| crate::score::refitted(&[e], 1.0);
+        let ranked = |e: &str| Scored {
+            confirmation: None,
+            ranked: true,
+            ..refitted(e)
+        };
+        let alone = |e: &str| {
+            let mut c = vec![refitted(e)];
+            calibrate(&p, &mut c, 19);
+            c.remove(0).placebo.unwrap()
+        };
+        let (a, b) = (alone("rate(t, 100)"), alone("lag(t, 600)"));
+        assert!(a.placebos.len() > 1 && b.placebos.len() > 1);
+        let exact = statistics_alone(&p, &[&refitted("rate(t, 100)"), &refitted("lag(t, 600)")]);
+        assert_eq!(exact, vec![a.statistic, b.statistic]);
+        let mut both = vec![refitted("lag(t, 600)"), ranked("rate(t, 100)")];
+        calibrate(&p, &mut both, 19);
+        assert!(both[1].placebo.is_none());
+        let tested = both[0].placebo.as_ref().unwrap();
+        assert_eq!(tested.statistic, b.statistic);
+        assert_eq!(tested.threshold, a.threshold.max(b.threshold));
+        // The ranked one's placebos are the higher: without them the threshold would be lower.
+        assert!(a.threshold > b.threshold, "{} {}", a.threshold, b.threshold);
     }
 
     #[test]

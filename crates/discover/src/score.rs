@@ -108,6 +108,11 @@ pub struct Scored {
     /// ([`crate::confirm::together`]); empty for a single effect.
     #[serde(skip)]
     pub joined: Vec<Scored>,
+    /// Whether this composition was ranked for the compositions' refit slots by the placebo leg's
+    /// statistic ([`crate::confirm`]): its placebos then count in the leg's threshold whether or
+    /// not it was refitted ([`crate::placebo::calibrate`]).
+    #[serde(skip)]
+    pub ranked: bool,
 }
 
 impl Scored {
@@ -276,6 +281,7 @@ pub fn score(p: &Prepared, families: &[Family]) -> (Vec<Scored>, Vec<Skipped>) {
             fails: Vec::new(),
             description_nats: 0.0,
             joined: Vec::new(),
+            ranked: false,
         });
     }
     (scored, skipped)
@@ -322,5 +328,6 @@ pub(crate) fn refitted(exprs: &[&str], evidence: f64) -> Scored {
         fails: Vec::new(),
         description_nats: 0.0,
         joined: Vec::new(),
+        ranked: false,
     }
 }

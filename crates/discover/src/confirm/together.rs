@@ -83,6 +83,7 @@ fn join(a: &Scored, b: &Scored) -> Scored {
     u.passes = false;
     u.fails.clear();
     u.joined = vec![a.clone(), b.clone()];
+    u.ranked = false;
     u
 }
 
