@@ -33,11 +33,11 @@
 //!   2.5 % — a false-alarm rate set by construction, not by tuning, and measured on the negative
 //!   controls (`tests/false_discoveries.rs`). "Tested" includes the compositions ranked for the
 //!   refit slots by this statistic ([`statistics_alone`], `crate::confirm::confirm`) that did not
-//!   get one: a choice made by the statistic is part of the test, and the rate of 1 / (placebos +
-//!   1) holds only over every candidate the choice looked at. (Measured: it is no cure-all. On
-//!   the plain negative control's seed 62010 a relay on a slow rate of an idle supply, fourth of
-//!   four compositions by evidence and first by this statistic, is named at 8.7 against a
-//!   threshold of 8.6, with those placebos counted or not.)
+//!   get one: a choice made by the statistic is part of the test, and the false-alarm rate above
+//!   holds only over every candidate the choice looked at. (Measured: it is no cure-all. On the
+//!   plain negative control's seed 62010 a relay on a slow rate of an idle supply, fourth of four
+//!   compositions by evidence and first by this statistic, is named at 8.7 against a threshold
+//!   of 8.6, with those placebos counted or not.)
 //!
 //! - **A second stage** for a candidate with no searched parameter that fails the first but
 //!   clears every other leg ([`RefitPlacebos`]): the trainer's refits of its placebos on the
