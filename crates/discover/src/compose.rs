@@ -74,8 +74,12 @@
 //! them the [`PER_OPERAND`] best over each non-thermal input, so that one input's shapes (or an
 //! idle column's) cannot fill the beam alone (measured: `lag(abs(supply_v − 28.1), 900)` was
 //! never composed, `abs(supply_v − 28.1)` seventh behind a relay on the supply and four shapes of
-//! an idle heater column; with it, the lag of it led the depth-two search by 77 nats). A
-//! composition is kept when it explains more than the best single shape by [`EARN_NATS`], or
+//! an idle heater column; with it, the lag of it led the depth-two search by 77 nats). A rate
+//! the beam leaves out is still composed with the even functions (those that forget their
+//! operand's sign, measured like every behaviour: the square, the size): an even function of a
+//! rate has no linear part in it, so the rate's own gain cannot nominate it (measured:
+//! `sq(rate(t_anode_c − t_shell_c))` was never composed, the gradient's rate 36th at depth
+//! one; with it, named exactly). A composition is kept when it explains more than the best single shape by [`EARN_NATS`], or
 //! as much as it (within [`crate::score::INDISTINCT_NATS`]) and more than its own inner shape by
 //! [`EARN_NATS`]: another explanation of the same residual, for the refits and the verdict to
 //! weigh (measured: a relay on a lagging element tied a wider relay on the thermometer, 111.1
@@ -98,11 +102,11 @@
 //! supply are named with their parameters exactly; the rate of a lagged input as a lagged rate,
 //! the size of a temperature's rate or a supply's, the rate of a saturating supply, a lagged
 //! V-shaped supply, a kink in a lagged supply, a lagged saturating supply, a lagged heater
-//! voltage (`lag(heater_v, 700)`).
+//! voltage (`lag(heater_v, 700)`), the square of a gradient's rate.
 //! Not yet: a mode hop of a lagging element (a wider relay ties it, below), an input times a rate,
 //! a lagged rate (named as the lag it equals with the model's own `T`), a narrow mode hop, a
 //! saturating gradient, a saturating lagging element, a lagged mode hop, a lagged warm-up (named as
-//! one warm-up), the square of a gradient's rate; a saturating supply (named as a kink's clamp
+//! one warm-up); a saturating supply (named as a kink's clamp
 //! whose bounds the run prefers to the truth's), a relay on a heater that steps between levels (any
 //! switching point between two of them is the same training column), a relay on a lagged supply
 //! ("cannot tell": its held-out refits disagree), a relay on the supply times the temperature (the
@@ -370,6 +374,8 @@ struct Behaviour {
     /// The output holds a level while the operand moves (a clamp's bound, a relay's state): the
     /// run must visit each of its regimes ([`crate::regimes`]).
     saturates: bool,
+    /// `f(−x) = f(x)`: the output forgets the operand's sign (a square, a size).
+    even: bool,
 }
 
 /// Every one-operand function of the language with its behaviour, measured once per process.
@@ -421,6 +427,7 @@ fn behaviour(f: &Function) -> Option<Behaviour> {
         call(Expr::name("x") - Expr::num(10.0)).to_string(),
         call(Expr::name("x") + Expr::num(10.0)).to_string(),
         call(Expr::num(3.0) * Expr::name("x")).to_string(),
+        call(-Expr::name("x")).to_string(),
     ];
     let time: Vec<f64> = (0..n).map(|i| i as f64).collect();
     let data = Dataset::from_columns(
@@ -435,7 +442,7 @@ fn behaviour(f: &Function) -> Option<Behaviour> {
     let program = spec.program().ok()?;
     let rows = features::compute(&program, &data, &time, &[0]).ok()?;
     let col = |k: usize| -> Vec<f64> { rows.iter().map(|r| f64::from(r[k])).collect() };
-    let (fx, fs, fp, f3) = (col(0), col(1), col(2), col(3));
+    let (fx, fs, fp, f3, fm) = (col(0), col(1), col(2), col(3), col(4));
     let unexplained = unexplained(&fs, &[&fx, &x]);
     let scale = fx.iter().map(|v| v.abs()).fold(0.0, f64::max).max(1e-9);
     let keeps = fp
@@ -454,12 +461,14 @@ fn behaviour(f: &Function) -> Option<Behaviour> {
         .zip(&fx)
         .all(|(a, b)| (a - 3.0 * b).abs() <= 3.0 * tol);
     let alone = self::unexplained(&fs, &[&fx]);
+    let even = fm.iter().zip(&fx).all(|(a, b)| (a - b).abs() <= tol);
     Some(Behaviour {
         shift_matters: unexplained > 1e-4,
         shift_matters_alone: alone > 1e-4,
         keeps_level: keeps,
         linear: scales && hi - lo <= tol,
         saturates: crate::regimes::saturates(&fx, &x),
+        even,
     })
 }
 
@@ -1272,6 +1281,12 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
     }
     let mut among = shapes.len();
     let inputs: HashSet<String> = src.inputs.iter().cloned().collect();
+    let is_rate = |s: &Shape| {
+        matches!(&s.op, Op::Call(g) if functions
+            .iter()
+            .any(|(h, b)| h.name == g.name && b.linear && !b.keeps_level))
+    };
+    let rates: Vec<Shape> = shapes.iter().filter(|s| is_rate(s)).cloned().collect();
     let first = best(&screen, shapes, BEAM, (PER_OPERAND, &inputs));
 
     // Depth two: every function over the best, and their products with every atom.
@@ -1313,6 +1328,30 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
                 ranges: Vec::new(),
                 level: false,
             });
+        }
+    }
+    // An even function of a rate (its square, its size) has no linear part in the rate: the
+    // rate's own gain says nothing of it, so every rate the beam left out is composed with the
+    // even functions, its window searched with theirs (measured: `sq(rate(t_anode_c −
+    // t_shell_c))` was never composed, `rate(t_anode_c − t_shell_c)` 36th of the depth-one
+    // shapes behind products of temperatures and gradients). Evenness is measured, like every
+    // behaviour: a function added to the language that forgets its operand's sign joins them.
+    let composed: HashSet<String> = first
+        .iter()
+        .map(|f| signature(&f.expr().to_string()))
+        .collect();
+    let left_out: Vec<Found> = rates
+        .par_iter()
+        .filter_map(|s| coarse(&screen, s))
+        .filter(|f| !composed.contains(&signature(&f.expr().to_string())))
+        .collect();
+    for n in &left_out {
+        let e = n.expr();
+        for &(f, b) in functions.iter().filter(|(f, b)| b.even && !f.stateful) {
+            next.extend(shape_of(p, times, f, b, &e, false).map(|s| Shape {
+                inner: Some(Box::new(n.clone())),
+                ..s
+            }));
         }
     }
     let floor = first
@@ -1730,6 +1769,11 @@ mod tests {
         assert!(b("hyst").saturates && b("clamp").saturates);
         for f in ["sq", "abs", "hyst", "clamp"] {
             assert!(!b(f).linear, "{f}");
+        }
+        // Forgetting the operand's sign: the square and the size, nothing else.
+        assert!(b("sq").even && b("abs").even);
+        for f in ["lag", "rate", "hyst", "clamp"] {
+            assert!(!b(f).even, "{f}");
         }
     }
 
