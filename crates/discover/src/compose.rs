@@ -70,31 +70,30 @@
 //! (measured: a clamp of a rate to a band two thousandths wide tied a mode hop and made "cannot
 //! tell"; on fresh negative controls, a clamp of an idle heater's rate to a band 0.0002 wide was
 //! named, 1 of 100, and is no longer).
-//! Pruned by evidence: only the [`BEAM`] best depth-one shapes are composed again — and beside
-//! them the [`PER_OPERAND`] best over each non-thermal input, so that one input's shapes (or an
-//! idle column's) cannot fill the beam alone (measured: `lag(abs(supply_v − 28.1), 900)` was
-//! never composed, `abs(supply_v − 28.1)` seventh behind a relay on the supply and four shapes of
-//! an idle heater column; with it, the lag of it led the depth-two search by 77 nats). A rate
-//! the beam leaves out is still composed with the even functions (those that forget their
-//! operand's sign, measured like every behaviour: the square, the size): an even function of a
-//! rate has no linear part in it, so the rate's own gain cannot nominate it (measured:
-//! `sq(rate(t_anode_c − t_shell_c))` was never composed, the gradient's rate 36th at depth
-//! one; with it, named exactly). A composition is kept when it explains more than the best single shape by [`EARN_NATS`], or
-//! as much as it (within [`crate::score::INDISTINCT_NATS`]) and more than its own inner shape by
-//! [`EARN_NATS`]: another explanation of the same residual, for the refits and the verdict to
-//! weigh (measured: a relay on a lagging element tied a wider relay on the thermometer, 111.1
-//! against 110.9 nats, and the wider relay was named, 1.85× the floor where the truth reaches
-//! 0.91×; handed on, the two are weighed by the verdict, whose structure prior names the
-//! simpler where the refits tie: [`crate::description`]). Shapes whose training columns are one
-//! ([`simplest`]: the same column, the same stateful functions over the same inputs) are one
-//! name, the simplest. Only the [`PROPOSED`] best shapes that no listed family already covers are
-//! handed on. They are then
+//! Pruned by evidence: only the [`BEAM`] best depth-one shapes are composed again — and beside them
+//! the [`PER_OPERAND`] best over each non-thermal input, so that one input's shapes (or an idle
+//! column's) cannot fill the beam alone (measured: `lag(abs(supply_v − 28.1), 900)` was never
+//! composed, `abs(supply_v − 28.1)` seventh behind a relay on the supply and four shapes of an idle
+//! heater column; with it, the lag of it led the depth-two search by 77 nats). A rate the beam
+//! leaves out is still composed with the even functions (those that forget their operand's sign,
+//! measured like every behaviour: the square, the size): an even function of a rate has no linear
+//! part in it, so the rate's own gain cannot nominate it (measured: `sq(rate(t_anode_c −
+//! t_shell_c))` was never composed, the gradient's rate 36th at depth one; with it, named exactly).
+//! A composition is kept when it explains more than the best single shape by [`EARN_NATS`], or as
+//! much as it (within [`crate::score::INDISTINCT_NATS`]) and more than its own inner shape by
+//! [`EARN_NATS`]: another explanation of the same residual, for the refits and the verdict to weigh
+//! (measured: a relay on a lagging element tied a wider relay on the thermometer, 111.1 against
+//! 110.9 nats, and the wider relay was named, 1.85× the floor where the truth reaches 0.91×; handed
+//! on, the two are weighed by the verdict, whose structure prior names the simpler where the refits
+//! tie: [`crate::description`]). Shapes whose training columns are one ([`simplest`]: the same
+//! column, the same stateful functions over the same inputs) are one name, the simplest. Only the
+//! [`PROPOSED`] best shapes that no listed family already covers are handed on. They are then
 //! scored, refitted, placebo-tested — each placebo the best of the same shape's members on the
 //! shifted columns ([`crate::candidates::Searched::Alternatives`]), since the candidate is the best
-//! of them on the run — and judged like every other candidate, including the leg that the
-//! trainer's refit with a candidate read off the data must gain evidence ([`crate::verdict`]).
-//! The choice among the shapes is priced too: each of the `N` shapes searched holds `1/N` of the
-//! prior a listed family holds, so a composition's placebo statistic is lowered by `ln N` nats
+//! of them on the run — and judged like every other candidate, including the leg that the trainer's
+//! refit with a candidate read off the data must gain evidence ([`crate::verdict`]). The choice
+//! among the shapes is priced too: each of the `N` shapes searched holds `1/N` of the prior a
+//! listed family holds, so a composition's placebo statistic is lowered by `ln N` nats
 //! ([`crate::placebo`]).
 //!
 //! Measured (`tests/composed.rs`, `tests/false_discoveries.rs`, BENCHMARKS.md): a mode hop, a
@@ -106,13 +105,13 @@
 //! Not yet: a mode hop of a lagging element (a wider relay ties it, below), an input times a rate,
 //! a lagged rate (named as the lag it equals with the model's own `T`), a narrow mode hop, a
 //! saturating gradient, a saturating lagging element, a lagged mode hop, a lagged warm-up (named as
-//! one warm-up); a saturating supply (named as a kink's clamp
-//! whose bounds the run prefers to the truth's), a relay on a heater that steps between levels (any
-//! switching point between two of them is the same training column), a relay on a lagged supply
-//! ("cannot tell": its held-out refits disagree), a relay on the supply times the temperature (the
-//! shape named, a switching point 0.1 V off, which the verification run magnifies) or times its
-//! rate, a relay on a lagged gradient (named with its lag 1.5× the truth's), and a kink in a second
-//! input (named through a short lag of it).
+//! one warm-up); a saturating supply (named as a kink's clamp whose bounds the run prefers to the
+//! truth's), a relay on a heater that steps between levels (any switching point between two of them
+//! is the same training column), a relay on a lagged supply ("cannot tell": its held-out refits
+//! disagree), a relay on the supply times the temperature (the shape named, a switching point 0.1 V
+//! off, which the verification run magnifies) or times its rate, a relay on a lagged gradient
+//! (named with its lag 1.5× the truth's), and a kink in a second input (named through a short lag
+//! of it).
 //!
 //! Places are written to the run's precision (`plainest`, below): the shortest number whose
 //! gain the run cannot tell from the estimate's. A relay's switching points are otherwise
@@ -1281,6 +1280,7 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
     }
     let mut among = shapes.len();
     let inputs: HashSet<String> = src.inputs.iter().cloned().collect();
+    // A rate is told by its measured behaviour: a linear filter whose output is no level.
     let is_rate = |s: &Shape| {
         matches!(&s.op, Op::Call(g) if functions
             .iter()
@@ -1301,11 +1301,8 @@ pub fn propose(p: &Prepared, src: &Sources, listed: &[Family]) -> Vec<Family> {
                 Op::Times(_) => false,
             };
         // A temperature's rate is not a temperature: a memoryless function of it (`abs(rate(T))`,
-        // a bias the same on heating and cooling) is no shape of the bias–temperature curve. A
-        // rate is told by its measured behaviour: a linear filter whose output is no level.
-        let of_a_rate = matches!(&n.shape.op, Op::Call(g) if functions
-            .iter()
-            .any(|(h, b)| h.name == g.name && b.linear && !b.keeps_level));
+        // a bias the same on heating and cooling) is no shape of the bias–temperature curve.
+        let of_a_rate = is_rate(&n.shape);
         for &(f, b) in functions
             .iter()
             .filter(|(f, _)| allowed(f, &e) || of_a_rate)
